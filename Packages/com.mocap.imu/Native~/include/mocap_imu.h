@@ -1,0 +1,347 @@
+/*
+ * mocap_imu.h: public C API of the com.mocap.imu engine.
+ *
+ * The engine turns HiPNUC inertial sensor byte streams (USB serial, HID, or a recorded capture)
+ * into synchronised, calibrated bone orientations and accelerations in the model frame
+ * (right-handed, Y up, character facing +Z at calibration, metres, seconds).
+ *
+ * Conventions
+ *  - Every function that can fail returns mocap_status. MOCAP_OK is 0; anything else is an error
+ *    whose human-readable text mocap_last_error() returns on the same thread.
+ *  - Handles are opaque. Only fixed-width, blittable types cross this boundary, so the structs
+ *    can be mirrored 1:1 from C# (see mocap_struct_layout()).
+ *  - Quaternions are (w, x, y, z). Rotation matrices are row-major float[9].
+ *  - Thread safety is stated per function. "Any thread" means the call may race with other calls
+ *    on the same session from other threads; "one thread" means the caller serialises calls.
+ *
+ * Versioning: MOCAP_API_VERSION changes when a signature or struct layout changes.
+ * mocap_api_version() returns the value the library was built with; compare it at load time.
+ */
+#ifndef MOCAP_IMU_H
+#define MOCAP_IMU_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(_WIN32)
+#  if defined(MOCAP_BUILDING_LIBRARY)
+#    define MOCAP_API __declspec(dllexport)
+#  else
+#    define MOCAP_API __declspec(dllimport)
+#  endif
+#elif defined(__GNUC__)
+#  define MOCAP_API __attribute__((visibility("default")))
+#else
+#  define MOCAP_API
+#endif
+
+#define MOCAP_API_VERSION 1
+#define MOCAP_SENSOR_COUNT 6
+#define MOCAP_PATH_MAX 260
+
+/* ------------------------------------------------------------------------------------------ */
+/* Status codes                                                                                */
+/* ------------------------------------------------------------------------------------------ */
+typedef int32_t mocap_status;
+enum {
+    MOCAP_OK = 0,
+    MOCAP_ERR_INVALID_ARGUMENT = 1, /* a NULL pointer, an out-of-range value, a bad config */
+    MOCAP_ERR_NOT_FOUND = 2,        /* port, device or file does not exist */
+    MOCAP_ERR_PERMISSION = 3,       /* the OS refused access (e.g. not in the dialout group) */
+    MOCAP_ERR_IO = 4,               /* read/write failed; disk full; device error */
+    MOCAP_ERR_DISCONNECTED = 5,     /* the device went away (unplugged) */
+    MOCAP_ERR_FORMAT = 6,           /* a file is not what it claims (bad magic, CRC, version) */
+    MOCAP_ERR_STATE = 7,            /* the call is not valid in the session's current state */
+    MOCAP_ERR_UNSUPPORTED = 8,      /* feature not compiled in or not available on this OS */
+    MOCAP_ERR_NO_MEMORY = 9,
+    MOCAP_ERR_BAD_CALIBRATION = 10, /* calibration refused: see mocap_calibration_report */
+    MOCAP_ERR_NO_DATA = 11,         /* nothing new to return (not a failure for polling) */
+    MOCAP_ERR_END_OF_STREAM = 12,   /* a replay has delivered everything */
+    MOCAP_ERR_TIMEOUT = 13
+};
+
+/* Text of the last error raised on the calling thread (never NULL; "" when none).
+ * Thread safety: any thread; the text is thread-local and valid until the next failing call. */
+MOCAP_API const char *mocap_last_error(void);
+
+/* Short constant name of a status code, e.g. "MOCAP_ERR_NOT_FOUND". Any thread. */
+MOCAP_API const char *mocap_status_name(mocap_status status);
+
+/* MOCAP_API_VERSION of the built library. Any thread. */
+MOCAP_API int32_t mocap_api_version(void);
+
+/* "major.minor.patch" of the engine. Any thread. */
+MOCAP_API const char *mocap_version_string(void);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Body segments and sensor data                                                               */
+/* ------------------------------------------------------------------------------------------ */
+/* The fixed sensor order used everywhere (and by the pose model). */
+typedef enum mocap_segment {
+    MOCAP_SEGMENT_PELVIS = 0,
+    MOCAP_SEGMENT_LEFT_WRIST = 1,
+    MOCAP_SEGMENT_RIGHT_WRIST = 2,
+    MOCAP_SEGMENT_LEFT_SHIN = 3,
+    MOCAP_SEGMENT_RIGHT_SHIN = 4,
+    MOCAP_SEGMENT_HEAD = 5
+} mocap_segment;
+
+/* Name such as "pelvis", "left_wrist". Any thread. NULL for an invalid segment. */
+MOCAP_API const char *mocap_segment_name(int32_t segment);
+
+/* Per-sensor flags in mocap_sensor_frame.flags. */
+enum {
+    MOCAP_SENSOR_VALID = 1u << 0,        /* has ever produced a sample; values are meaningful */
+    MOCAP_SENSOR_HELD = 1u << 1,         /* no sample bracketed this frame: last value held */
+    MOCAP_SENSOR_STALE = 1u << 2,        /* last sample older than stale_after_s */
+    MOCAP_SENSOR_CALIBRATED = 1u << 3,   /* bone_* fields use a calibration */
+    MOCAP_SENSOR_EXTRAPOLATED = 1u << 4  /* reserved */
+};
+
+/* One sensor in one output frame. All vectors in SI units. */
+typedef struct mocap_sensor_frame {
+    /* Calibrated bone orientation, bone -> model frame, quaternion (w,x,y,z). Before calibration
+     * it is the sensor's own orientation mapped upright into the model frame (a preview, with
+     * MOCAP_SENSOR_CALIBRATED clear); identity for a sensor that never sent data. */
+    float bone_orientation[4];
+    /* Bone-attached linear acceleration in the model frame, gravity and offset removed, m/s^2
+     * (zero before calibration). */
+    float bone_acceleration[3];
+    /* Raw sensor orientation, sensor -> sensor world frame (Z up; NWU or ENU), after validation. */
+    float sensor_orientation[4];
+    /* Specific force in the sensor world frame, Kalman filtered, m/s^2 (about +9.81 on Z at rest). */
+    float world_specific_force[3];
+    /* Angular rate in the sensor frame, rad/s. */
+    float angular_rate[3];
+    /* Seconds since this sensor's newest sample, at the frame time (negative never). */
+    float age_s;
+    uint32_t flags;  /* MOCAP_SENSOR_* */
+    uint32_t node_id;
+} mocap_sensor_frame;
+
+/* Frame flags in mocap_frame.flags. */
+enum {
+    MOCAP_FRAME_CALIBRATED = 1u << 0, /* every sensor has a calibration */
+    MOCAP_FRAME_COMPLETE = 1u << 1    /* every sensor had a fresh sample bracketing the frame */
+};
+
+/* One synchronised output frame at the session's output rate. */
+typedef struct mocap_frame {
+    uint64_t sequence;         /* 0, 1, 2 ... per session; gaps mean frames were dropped */
+    double time_s;             /* frame time on the session clock (seconds) */
+    int64_t newest_receive_ns; /* receive time of the newest bytes that fed this frame */
+    int64_t emitted_ns;        /* session clock when the frame was produced (latency = diff) */
+    uint32_t flags;            /* MOCAP_FRAME_* */
+    uint32_t fresh_mask;       /* bit s set: sensor s had a fresh sample for this frame */
+    mocap_sensor_frame sensors[MOCAP_SENSOR_COUNT];
+} mocap_frame;
+
+/* ------------------------------------------------------------------------------------------ */
+/* Session configuration                                                                       */
+/* ------------------------------------------------------------------------------------------ */
+typedef enum mocap_source_kind {
+    MOCAP_SOURCE_SERIAL = 0,  /* path = port, e.g. "/dev/ttyUSB0" or "COM3" */
+    MOCAP_SOURCE_HID = 1,     /* hid_vendor_id/hid_product_id, or path = hidraw path */
+    MOCAP_SOURCE_REPLAY = 2   /* path = capture file written by the engine */
+} mocap_source_kind;
+
+typedef enum mocap_imusol_layout {
+    MOCAP_IMUSOL_AUTO = 0,        /* decide per packet when unambiguous, else node id layout */
+    MOCAP_IMUSOL_NODE_ID = 1,     /* older firmware: byte 1 is the node id */
+    MOCAP_IMUSOL_STATUS_WORD = 2  /* newer firmware: bytes 1..2 status, 3 temperature, 4..7 Pa */
+} mocap_imusol_layout;
+
+typedef enum mocap_world_frame {
+    MOCAP_WORLD_NWU = 0,  /* X north, Y west, Z up (HI221 manual) */
+    MOCAP_WORLD_ENU = 1   /* X east, Y north, Z up (newer SDK default) */
+} mocap_world_frame;
+
+typedef struct mocap_session_config {
+    uint32_t struct_size;     /* sizeof(mocap_session_config): lets the library check the caller */
+    int32_t source_kind;      /* mocap_source_kind */
+    char path[MOCAP_PATH_MAX];/* port, hidraw path or capture file (UTF-8, NUL-terminated) */
+    uint32_t baud;            /* serial only; any rate the OS accepts (default 460800) */
+    uint16_t hid_vendor_id;   /* HID only, when path is empty */
+    uint16_t hid_product_id;
+    int32_t node_ids[MOCAP_SENSOR_COUNT]; /* node id of the sensor on each segment, -1 = none */
+    int32_t imusol_layout;    /* mocap_imusol_layout */
+    int32_t world_frame;      /* mocap_world_frame: only used before calibration, see docs */
+    float output_rate_hz;     /* output frame rate (default 60) */
+    float hold_latency_s;     /* wait this long for late sensors before holding (default 0.05) */
+    float stale_after_s;      /* a sensor is stale after this long without data (default 0.25) */
+    float kalman_process_noise;     /* acceleration random-walk spectral density (m/s^3)^2/Hz */
+    float kalman_measurement_noise; /* accelerometer noise variance (m/s^2)^2 */
+    int32_t replay_realtime;  /* replay: 0 = as fast as possible, 1 = at recorded pace */
+    float replay_speed;       /* replay_realtime: pace multiplier (default 1) */
+    int32_t auto_reconnect;   /* serial/HID: reopen after an unplug (default 1) */
+    char capture_path[MOCAP_PATH_MAX]; /* if non-empty, record the raw byte stream here */
+} mocap_session_config;
+
+/* Fill a config with defaults (struct_size set, 460800 baud, node ids 0..5, 60 Hz ...).
+ * Any thread. */
+MOCAP_API mocap_status mocap_config_defaults(mocap_session_config *config);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Session                                                                                     */
+/* ------------------------------------------------------------------------------------------ */
+typedef struct mocap_session mocap_session;
+
+/* Validate the config and open the source (the port, device or file). No thread runs yet, so
+ * calibration can be loaded or scheduled before mocap_session_start(). On failure *out is NULL
+ * and mocap_last_error() names the port/file and the cause. One thread. */
+MOCAP_API mocap_status mocap_session_open(const mocap_session_config *config, mocap_session **out);
+
+/* Start the reader and processing threads. One thread. */
+MOCAP_API mocap_status mocap_session_start(mocap_session *session);
+
+/* Stop all threads (even while a device read blocks), flush a capture being recorded and free
+ * the session. NULL is accepted. After this the handle is invalid. One thread, and no other
+ * call on this session may be in progress. */
+MOCAP_API void mocap_session_close(mocap_session *session);
+
+/* Copy the newest frame into *out. MOCAP_ERR_NO_DATA when no frame is newer than the one the
+ * previous poll returned; MOCAP_ERR_END_OF_STREAM once a replay is finished and drained.
+ * Consumer thread: one thread at a time polls/drains a session. */
+MOCAP_API mocap_status mocap_session_poll_latest(mocap_session *session, mocap_frame *out);
+
+/* Copy up to capacity frames produced since the previous drain, oldest first, into out;
+ * *count receives how many. MOCAP_ERR_NO_DATA when there were none; END_OF_STREAM as above.
+ * Consumer thread (same one as poll_latest). */
+MOCAP_API mocap_status mocap_session_drain(mocap_session *session, mocap_frame *out,
+                                           uint32_t capacity, uint32_t *count);
+
+typedef enum mocap_connection_state {
+    MOCAP_CONNECTION_CLOSED = 0,
+    MOCAP_CONNECTION_CONNECTED = 1,
+    MOCAP_CONNECTION_DISCONNECTED = 2, /* device lost; reconnecting when auto_reconnect */
+    MOCAP_CONNECTION_ENDED = 3         /* replay finished */
+} mocap_connection_state;
+
+/* Counters and health of a running session. */
+typedef struct mocap_session_stats {
+    uint64_t bytes_received;
+    uint64_t frames_decoded;      /* HiPNUC frames with a valid CRC */
+    uint64_t crc_failures;
+    uint64_t bytes_skipped;       /* garbage bytes discarded while resynchronising */
+    uint64_t unknown_packets;     /* payloads with an unknown tag */
+    uint64_t samples_decoded;     /* per-sensor samples (a 0x62 frame gives several) */
+    uint64_t samples_rejected;    /* NaN/Inf, zero or non-unit quaternions, unknown nodes */
+    uint64_t frames_emitted;
+    uint64_t frames_dropped;      /* output frames lost because the consumer was too slow */
+    uint64_t bytes_dropped;       /* input bytes lost because processing was too slow */
+    uint64_t reconnects;
+    uint64_t capture_bytes_written;
+    int32_t connection_state;     /* mocap_connection_state */
+    int32_t capture_error;        /* mocap_status of the capture writer (0 = fine) */
+    uint32_t sensors_seen_mask;   /* bit s: the sensor of segment s produced a sample */
+    uint32_t reserved;
+    char last_error[256];         /* last asynchronous error (device lost, disk full ...) */
+} mocap_session_stats;
+
+/* Any thread. */
+MOCAP_API mocap_status mocap_session_get_stats(mocap_session *session, mocap_session_stats *out);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Calibration                                                                                 */
+/* ------------------------------------------------------------------------------------------ */
+typedef enum mocap_calibration_step {
+    /* All sensors lie still, X axis pointing the way the user will face, Z up. Gives each
+     * sensor's world alignment (a yaw about world up). */
+    MOCAP_CALIBRATION_HEADING = 0,
+    /* Sensors strapped on, user stands still in a T-pose facing forward. Gives each sensor's
+     * fixed rotation to its bone and its acceleration offset. */
+    MOCAP_CALIBRATION_TPOSE = 1,
+    /* Yaw-only re-alignment against drift: the user stands still facing forward, upright, arms
+     * relaxed at the sides or out in a T-pose. Each calibrated sensor's world alignment is turned
+     * about the vertical so its bone faces +Z again; mounting and offsets are kept (no T-pose). */
+    MOCAP_CALIBRATION_HEADING_RESET = 2
+} mocap_calibration_step;
+
+typedef enum mocap_calibration_state {
+    MOCAP_CALIBRATION_IDLE = 0,
+    MOCAP_CALIBRATION_WAITING = 1,   /* scheduled, window not reached yet */
+    MOCAP_CALIBRATION_COLLECTING = 2,
+    MOCAP_CALIBRATION_ACCEPTED = 3,
+    MOCAP_CALIBRATION_REFUSED = 4
+} mocap_calibration_state;
+
+/* Quality of one sensor over a calibration window. */
+typedef struct mocap_sensor_quality {
+    float gyro_rms_dps;        /* RMS angular rate over the window, deg/s (stillness) */
+    float orientation_spread_deg; /* RMS angle of orientations about their mean */
+    float accel_norm_error;    /* | |mean specific force| - g |, m/s^2 */
+    float tilt_deg;            /* heading step: angle between sensor Z and world up */
+    uint32_t samples;          /* frames with a fresh sample in the window */
+    int32_t ok;                /* 1 if this sensor passed every check */
+} mocap_sensor_quality;
+
+typedef struct mocap_calibration_report {
+    int32_t step;              /* mocap_calibration_step of the last request */
+    int32_t state;             /* mocap_calibration_state */
+    float progress;            /* 0..1 through the collection window */
+    float seconds_remaining;
+    mocap_sensor_quality sensors[MOCAP_SENSOR_COUNT];
+    char reason[256];          /* why it was refused, naming the sensor(s) */
+} mocap_calibration_report;
+
+/* The result of calibration: everything needed to turn raw sensor data into model-frame data. */
+typedef struct mocap_calibration {
+    uint32_t struct_size;
+    uint32_t valid_mask;   /* bit s: heading and T-pose both done for segment s */
+    uint32_t heading_mask; /* bit s: heading done for segment s */
+    uint32_t reserved;
+    /* Sensor world -> model frame (a yaw about world up, then Z-up to Y-up), row-major. */
+    float world_to_model[MOCAP_SENSOR_COUNT][9];
+    /* Sensor frame -> bone frame (the mounting rotation), row-major. */
+    float sensor_to_bone[MOCAP_SENSOR_COUNT][9];
+    /* Mean model-frame specific force during the T-pose, subtracted from every frame (gravity
+     * plus bias), m/s^2. */
+    float acceleration_offset[MOCAP_SENSOR_COUNT][3];
+} mocap_calibration;
+
+/* Schedule a calibration step over the window [start_s, start_s + duration_s] of the session
+ * clock (frame time). start_s < 0 means "from the next frame". Steps queue: one scheduled while
+ * another is waiting or collecting starts after it (so a replay's heading and T-pose windows
+ * can both be scheduled before mocap_session_start). Up to 8 steps wait; more gives
+ * MOCAP_ERR_STATE. Calibration runs on the processing thread; poll the reports. Any thread. */
+MOCAP_API mocap_status mocap_calibration_schedule(mocap_session *session, int32_t step,
+                                                  double start_s, float duration_s);
+
+/* The step collecting now, or else the last one that finished. Any thread. */
+MOCAP_API mocap_status mocap_calibration_get_report(mocap_session *session,
+                                                    mocap_calibration_report *out);
+/* The latest request of one step (mocap_calibration_step): waiting, collecting or its result.
+ * Any thread. */
+MOCAP_API mocap_status mocap_calibration_get_step_report(mocap_session *session, int32_t step,
+                                                         mocap_calibration_report *out);
+/* Copy the calibration in use. Any thread. */
+MOCAP_API mocap_status mocap_calibration_get(mocap_session *session, mocap_calibration *out);
+/* Replace the calibration in use (e.g. loaded from a file). Any thread. */
+MOCAP_API mocap_status mocap_calibration_set(mocap_session *session, const mocap_calibration *cal);
+
+/* Save/load a calibration as a small versioned text file. Any thread. */
+MOCAP_API mocap_status mocap_calibration_save(const mocap_calibration *cal, const char *path);
+MOCAP_API mocap_status mocap_calibration_load(const char *path, mocap_calibration *out);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Layout description, so bindings in other languages can verify their struct mirrors.          */
+/* ------------------------------------------------------------------------------------------ */
+typedef struct mocap_field_layout {
+    const char *struct_name;
+    const char *field_name;
+    uint32_t offset;
+    uint32_t size;
+} mocap_field_layout;
+
+/* Returns a static table of every public struct field plus one row per struct with
+ * field_name "" giving sizeof. *count receives its length. Any thread. */
+MOCAP_API const mocap_field_layout *mocap_struct_layout(uint32_t *count);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MOCAP_IMU_H */

@@ -1,0 +1,70 @@
+/* Calibration maths (see docs/calibration.md):
+ *   heading step: per sensor, world_to_model = A * Rz(-yaw), yaw = heading of the sensor's X axis
+ *                 while it lies still pointing forward (A: Z-up world to Y-up model);
+ *   T-pose step:  sensor_to_bone = world_to_model * R_world_sensor(T)  (bones are identity in the
+ *                 T-pose), acceleration_offset = mean(world_to_model * f_world);
+ *   every frame:  R_bone = world_to_model * R_world_sensor(t) * sensor_to_bone^T,
+ *                 a_bone = world_to_model * f_world(t) - acceleration_offset.
+ *   heading reset: per sensor, a yaw about model up so the bone's forward axis faces +Z again.
+ * Nothing here depends on whether the sensor world is NWU or ENU, only on Z being up. */
+#ifndef MOCAP_CALIBRATION_H
+#define MOCAP_CALIBRATION_H
+
+#include "frame_assembler.h"
+#include "mocap_imu.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Thresholds for refusing a calibration window. */
+#define CALIB_MAX_GYRO_RMS_DPS 10.0
+#define CALIB_MAX_ORIENTATION_SPREAD_DEG 3.0
+#define CALIB_MAX_ACCEL_NORM_ERROR 1.5      /* m/s^2: catches motion and g-vs-m/s^2 mix-ups */
+#define CALIB_MAX_HEADING_TILT_DEG 30.0
+#define CALIB_MIN_SAMPLE_FRACTION 0.5       /* of the frames in the window */
+
+typedef struct calib_accumulator {
+    int32_t step;          /* mocap_calibration_step; -1 when idle */
+    int32_t state;         /* mocap_calibration_state */
+    double start_t;        /* < 0: start at the first frame added */
+    double duration;
+    uint32_t frames;       /* frames seen inside the window */
+    uint32_t samples[MOCAP_SENSOR_COUNT];
+    double quat_sum[MOCAP_SENSOR_COUNT][4];   /* sign-aligned sums for the mean orientation */
+    double quat_first[MOCAP_SENSOR_COUNT][4];
+    double force_sum[MOCAP_SENSOR_COUNT][3];
+    double gyro_sq_sum[MOCAP_SENSOR_COUNT];
+    /* Orientation spread needs the mean first; the window's orientations are kept (fixed size). */
+    uint32_t kept[MOCAP_SENSOR_COUNT];
+    float kept_quat[MOCAP_SENSOR_COUNT][1024][4];
+} calib_accumulator;
+
+void calib_init(calib_accumulator *acc);
+/* Arm a step for the window [start_t, start_t + duration] (start_t < 0: from the next frame). */
+void calib_begin(calib_accumulator *acc, int32_t step, double start_t, double duration);
+/* Feed every output frame. Returns 1 when the window has just closed (call calib_finish). */
+int calib_add_frame(calib_accumulator *acc, const raw_frame *frame);
+/* Evaluate the window: on success updates cal (only the fields the step owns) and returns
+ * MOCAP_OK; otherwise returns MOCAP_ERR_BAD_CALIBRATION with report->reason naming the sensors
+ * and leaves cal untouched. report is always filled. mapping from the current calibration is
+ * needed by HEADING_RESET. */
+mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
+                          mocap_calibration_report *report);
+/* Progress report while collecting (state, progress, seconds remaining). */
+void calib_progress(const calib_accumulator *acc, double now_t, mocap_calibration_report *report);
+
+/* Fill a calibration with identity mappings and empty masks. */
+void calib_identity(mocap_calibration *cal);
+/* Fill out->sensors[*] and out->flags from a raw frame and a calibration. world_frame
+ * (mocap_world_frame) picks the uncalibrated mapping for sensors without a heading. */
+void calib_apply(const mocap_calibration *cal, int32_t world_frame, const raw_frame *in,
+                 mocap_frame *out);
+
+mocap_status calib_save(const mocap_calibration *cal, const char *path);
+mocap_status calib_load(const char *path, mocap_calibration *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,63 @@
+/* Frame assembly: turns per-sensor samples (each sensor on its own clock and rate) into
+ * synchronised frames at a fixed output rate, interpolating each sensor to the frame time
+ * (slerp for orientation, linear for vectors). A sensor with no sample after the frame time
+ * holds its last value (HELD); without data for stale_after_s it is STALE. */
+#ifndef MOCAP_FRAME_ASSEMBLER_H
+#define MOCAP_FRAME_ASSEMBLER_H
+
+#include <stdint.h>
+#include "conditioning.h"
+#include "mocap_imu.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define ASSEMBLER_HISTORY 32  /* samples kept per sensor (0.32 s at 100 Hz) */
+
+/* One synchronised frame of raw (uncalibrated) sensor data. */
+typedef struct raw_frame {
+    uint64_t sequence;
+    double t;                       /* frame time, session clock */
+    uint32_t fresh_mask;            /* sensor had samples bracketing t */
+    uint32_t valid_mask;            /* sensor has ever produced a sample */
+    uint32_t stale_mask;            /* newest sample older than stale_after_s at t */
+    double quat[MOCAP_SENSOR_COUNT][4];        /* sensor -> world */
+    double force_world[MOCAP_SENSOR_COUNT][3]; /* specific force, world frame, m/s^2 */
+    double gyr[MOCAP_SENSOR_COUNT][3];         /* rad/s, sensor frame */
+    double age[MOCAP_SENSOR_COUNT];            /* t - newest sample time (>= 0) */
+    uint32_t node_id[MOCAP_SENSOR_COUNT];
+} raw_frame;
+
+typedef struct sensor_track {
+    imu_sample samples[ASSEMBLER_HISTORY]; /* ring, oldest at head */
+    uint32_t head;
+    uint32_t count;
+    int seen;
+} sensor_track;
+
+typedef struct frame_assembler {
+    double period;
+    double hold_latency;
+    double stale_after;
+    int started;
+    double next_t;      /* time of the next frame to emit */
+    uint64_t sequence;
+    uint64_t out_of_order; /* samples older than the sensor's newest, dropped */
+    sensor_track tracks[MOCAP_SENSOR_COUNT];
+} frame_assembler;
+
+void assembler_init(frame_assembler *a, double rate_hz, double hold_latency_s, double stale_after_s);
+/* Add a sample (s->segment in [0, MOCAP_SENSOR_COUNT), s->t increasing per sensor). */
+void assembler_push(frame_assembler *a, const imu_sample *s);
+/* Emit the next frame if it is due given the data so far and the current session time now_s:
+ * due when every valid sensor has a sample at or after next_t, or when now_s >= next_t +
+ * hold_latency and some sensor is not stale. When every sensor is stale the frame grid jumps to
+ * the first new sample instead of emitting frames of held data. Returns 1 and fills out when a
+ * frame was emitted, 0 otherwise; call repeatedly until it returns 0. */
+int assembler_next(frame_assembler *a, double now_s, raw_frame *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,71 @@
+/* Threads, locks, clocks and atomics behind one small interface: POSIX (platform_posix.c) and
+ * Win32 (platform_win32.c). */
+#ifndef MOCAP_PLATFORM_H
+#define MOCAP_PLATFORM_H
+
+#include <stdint.h>
+
+#if defined(__cplusplus) && !(defined(_MSC_VER) && !defined(__clang__))
+/* C++ (the tests) has no <stdatomic.h> before C++23. std::atomic<T> has the size, alignment and
+ * representation of _Atomic T on GCC and Clang, so structs holding these fields keep one layout
+ * in C and C++. Included outside extern "C" because it declares templates. */
+#include <atomic>
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(_MSC_VER) && !defined(__clang__)
+/* MSVC's C11 atomics need /experimental:c11atomics; use Interlocked intrinsics instead. */
+#include <intrin.h>
+typedef volatile long long mocap_atomic_u64;
+typedef volatile long mocap_atomic_int;
+#define mocap_atomic_load_u64(p) ((uint64_t)_InterlockedOr64((p), 0))
+#define mocap_atomic_store_u64(p, v) ((void)_InterlockedExchange64((p), (long long)(v)))
+#define mocap_atomic_add_u64(p, v) ((uint64_t)_InterlockedExchangeAdd64((p), (long long)(v)))
+#define mocap_atomic_load_int(p) ((int)_InterlockedOr((p), 0))
+#define mocap_atomic_store_int(p, v) ((void)_InterlockedExchange((p), (long)(v)))
+#define mocap_atomic_exchange_int(p, v) ((int)_InterlockedExchange((p), (long)(v)))
+#elif defined(__cplusplus)
+typedef std::atomic<uint64_t> mocap_atomic_u64;
+typedef std::atomic<int> mocap_atomic_int;
+#define mocap_atomic_load_u64(p) std::atomic_load_explicit((p), std::memory_order_acquire)
+#define mocap_atomic_store_u64(p, v) std::atomic_store_explicit((p), (uint64_t)(v), std::memory_order_release)
+#define mocap_atomic_add_u64(p, v) std::atomic_fetch_add_explicit((p), (uint64_t)(v), std::memory_order_acq_rel)
+#define mocap_atomic_load_int(p) std::atomic_load_explicit((p), std::memory_order_acquire)
+#define mocap_atomic_store_int(p, v) std::atomic_store_explicit((p), (int)(v), std::memory_order_release)
+#define mocap_atomic_exchange_int(p, v) std::atomic_exchange_explicit((p), (int)(v), std::memory_order_acq_rel)
+#else
+#include <stdatomic.h>
+typedef _Atomic uint64_t mocap_atomic_u64;
+typedef _Atomic int mocap_atomic_int;
+#define mocap_atomic_load_u64(p) atomic_load_explicit((p), memory_order_acquire)
+#define mocap_atomic_store_u64(p, v) atomic_store_explicit((p), (v), memory_order_release)
+#define mocap_atomic_add_u64(p, v) atomic_fetch_add_explicit((p), (v), memory_order_acq_rel)
+#define mocap_atomic_load_int(p) atomic_load_explicit((p), memory_order_acquire)
+#define mocap_atomic_store_int(p, v) atomic_store_explicit((p), (v), memory_order_release)
+#define mocap_atomic_exchange_int(p, v) atomic_exchange_explicit((p), (v), memory_order_acq_rel)
+#endif
+
+typedef struct mocap_thread mocap_thread;
+typedef struct mocap_mutex mocap_mutex;
+
+typedef void (*mocap_thread_fn)(void *arg);
+
+int mocap_thread_start(mocap_thread **out, mocap_thread_fn fn, void *arg, const char *name);
+void mocap_thread_join(mocap_thread *t);
+
+int mocap_mutex_create(mocap_mutex **out);
+void mocap_mutex_destroy(mocap_mutex *m);
+void mocap_mutex_lock(mocap_mutex *m);
+void mocap_mutex_unlock(mocap_mutex *m);
+
+/* Monotonic clock in nanoseconds (arbitrary origin). */
+int64_t mocap_monotonic_ns(void);
+void mocap_sleep_ms(int ms);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

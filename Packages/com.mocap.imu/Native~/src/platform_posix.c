@@ -1,0 +1,138 @@
+/* POSIX implementation of platform.h: pthreads, CLOCK_MONOTONIC, nanosleep. */
+#if defined(__linux__) && !defined(_GNU_SOURCE)
+#define _GNU_SOURCE /* pthread_setname_np */
+#endif
+
+#include "platform.h"
+
+#include "error.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#if defined(__FreeBSD__) || defined(__OpenBSD__)
+#include <pthread_np.h>
+#endif
+
+/* Linux limits thread names to 15 characters plus the terminator. */
+#define THREAD_NAME_CAP 16
+
+struct mocap_thread {
+    pthread_t handle;
+    mocap_thread_fn fn;
+    void *arg;
+    char name[THREAD_NAME_CAP];
+};
+
+struct mocap_mutex {
+    pthread_mutex_t handle;
+};
+
+static void name_current_thread(const char *name)
+{
+    if (!name[0]) return;
+    /* Naming is cosmetic (debuggers, top -H): failures are ignored. macOS can only name the
+     * calling thread, so every platform names the thread from inside it. */
+#if defined(__APPLE__)
+    (void)pthread_setname_np(name);
+#elif defined(__linux__) || defined(__NetBSD__)
+#if defined(__NetBSD__)
+    (void)pthread_setname_np(pthread_self(), "%s", (void *)name);
+#else
+    (void)pthread_setname_np(pthread_self(), name);
+#endif
+#elif defined(__FreeBSD__) || defined(__OpenBSD__)
+    pthread_set_name_np(pthread_self(), name);
+#endif
+}
+
+static void *thread_trampoline(void *arg)
+{
+    mocap_thread *t = (mocap_thread *)arg;
+    name_current_thread(t->name);
+    t->fn(t->arg);
+    return NULL;
+}
+
+int mocap_thread_start(mocap_thread **out, mocap_thread_fn fn, void *arg, const char *name)
+{
+    if (out) *out = NULL;
+    if (!out || !fn) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "thread start: NULL argument");
+    mocap_thread *t = (mocap_thread *)calloc(1, sizeof *t);
+    if (!t) return mocap_fail(MOCAP_ERR_NO_MEMORY, "thread start: out of memory");
+    t->fn = fn;
+    t->arg = arg;
+    if (name) {
+        /* Truncate rather than fail: Linux rejects longer names with ERANGE. */
+        size_t len = strlen(name);
+        if (len >= sizeof t->name) len = sizeof t->name - 1;
+        memcpy(t->name, name, len);
+        t->name[len] = '\0';
+    }
+    int err = pthread_create(&t->handle, NULL, thread_trampoline, t);
+    if (err != 0) {
+        char text[128];
+        free(t);
+        return mocap_fail(err == EAGAIN ? MOCAP_ERR_NO_MEMORY : MOCAP_ERR_IO,
+                          "cannot start thread '%s': %s", name ? name : "",
+                          mocap_errno_text(err, text, sizeof text));
+    }
+    *out = t;
+    return MOCAP_OK;
+}
+
+void mocap_thread_join(mocap_thread *t)
+{
+    if (!t) return;
+    (void)pthread_join(t->handle, NULL);
+    free(t);
+}
+
+int mocap_mutex_create(mocap_mutex **out)
+{
+    if (!out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "mutex create: NULL argument");
+    *out = NULL;
+    mocap_mutex *m = (mocap_mutex *)calloc(1, sizeof *m);
+    if (!m) return mocap_fail(MOCAP_ERR_NO_MEMORY, "mutex create: out of memory");
+    int err = pthread_mutex_init(&m->handle, NULL);
+    if (err != 0) {
+        char text[128];
+        free(m);
+        return mocap_fail(MOCAP_ERR_IO, "mutex create: %s", mocap_errno_text(err, text, sizeof text));
+    }
+    *out = m;
+    return MOCAP_OK;
+}
+
+void mocap_mutex_destroy(mocap_mutex *m)
+{
+    if (!m) return;
+    (void)pthread_mutex_destroy(&m->handle);
+    free(m);
+}
+
+void mocap_mutex_lock(mocap_mutex *m) { (void)pthread_mutex_lock(&m->handle); }
+
+void mocap_mutex_unlock(mocap_mutex *m) { (void)pthread_mutex_unlock(&m->handle); }
+
+int64_t mocap_monotonic_ns(void)
+{
+    struct timespec ts;
+    /* CLOCK_MONOTONIC cannot fail with a valid pointer on any supported system. */
+    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + (int64_t)ts.tv_nsec;
+}
+
+void mocap_sleep_ms(int ms)
+{
+    if (ms <= 0) return;
+    struct timespec req;
+    req.tv_sec = ms / 1000;
+    req.tv_nsec = (long)(ms % 1000) * 1000000L;
+    struct timespec rem;
+    /* A signal must not shorten the sleep: continue with what is left. */
+    while (nanosleep(&req, &rem) != 0 && errno == EINTR) req = rem;
+}

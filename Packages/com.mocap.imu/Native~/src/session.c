@@ -1,0 +1,557 @@
+/* The session: a reader thread per device -> byte ring -> processing thread (pipeline) ->
+ * frame ring -> the consumer's poll/drain calls. Rings are lock-free SPSC; the mutex only
+ * guards rare control traffic (calibration requests, stats and report snapshots). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "capture_file.h"
+#include "error.h"
+#include "mocap_imu.h"
+#include "pipeline.h"
+#include "platform.h"
+#include "spsc_ring.h"
+#include "transport.h"
+
+#define BYTE_CHUNK_CAPACITY 4096
+#define BYTE_RING_CHUNKS 256            /* 1 MiB of input in flight */
+#define FRAME_RING_FRAMES 1024          /* 17 s at 60 Hz for a consumer that drains rarely */
+#define READ_TIMEOUT_MS 50              /* bounds how long a stop request waits on a read */
+#define RECONNECT_INTERVAL_MS 250
+#define IDLE_SLEEP_MS 1
+
+typedef struct byte_chunk {
+    int64_t receive_ns;
+    uint32_t length;
+    uint32_t end_of_stream;
+    uint8_t data[BYTE_CHUNK_CAPACITY];
+} byte_chunk;
+
+#define PENDING_CALIBRATION_REQUESTS 8
+
+struct mocap_session {
+    mocap_session_config config;
+    transport *source;
+    capture_writer *capture;
+    pipeline *pipe;
+    spsc_ring bytes;
+    spsc_ring frames;
+    mocap_thread *reader;
+    mocap_thread *processor;
+    int started;
+    int replay_fast;            /* replay as fast as possible: back-pressure instead of dropping */
+
+    mocap_atomic_int stop;
+    mocap_atomic_int connection_state;
+    mocap_atomic_int processing_done;
+    mocap_atomic_u64 bytes_received;
+    mocap_atomic_u64 bytes_dropped;
+    mocap_atomic_u64 frames_dropped;
+    mocap_atomic_u64 reconnects;
+
+    /* Guarded by lock. */
+    mocap_mutex *lock;
+    calibration_request pending[PENDING_CALIBRATION_REQUESTS]; /* not yet handed to the pipeline */
+    uint32_t pending_count;
+    int calibration_set_pending;
+    mocap_calibration calibration_to_set;
+    mocap_calibration calibration_snapshot;
+    mocap_calibration_report report_snapshot;
+    mocap_calibration_report step_report_snapshot[MOCAP_CALIBRATION_HEADING_RESET + 1];
+    mocap_session_stats stats_snapshot;
+    char async_error[256];
+
+    /* Consumer side only. */
+    int have_latest;
+    mocap_frame latest;
+};
+
+/* ---------------------------------------------------------------------------------------- */
+
+mocap_status mocap_config_defaults(mocap_session_config *c)
+{
+    if (!c) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "config is NULL");
+    memset(c, 0, sizeof *c);
+    c->struct_size = sizeof *c;
+    c->source_kind = MOCAP_SOURCE_SERIAL;
+    c->baud = 460800;
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) c->node_ids[s] = s;
+    c->imusol_layout = MOCAP_IMUSOL_AUTO;
+    c->world_frame = MOCAP_WORLD_NWU;
+    c->output_rate_hz = 60.0f;
+    c->hold_latency_s = 0.05f;
+    c->stale_after_s = 0.25f;
+    c->kalman_process_noise = (float)KALMAN_DEFAULT_PROCESS_NOISE;
+    c->kalman_measurement_noise = (float)KALMAN_DEFAULT_MEASUREMENT_NOISE;
+    c->replay_realtime = 0;
+    c->replay_speed = 1.0f;
+    c->auto_reconnect = 1;
+    return MOCAP_OK;
+}
+
+static void set_async_error(mocap_session *s, const char *text)
+{
+    mocap_mutex_lock(s->lock);
+    snprintf(s->async_error, sizeof s->async_error, "%s", text);
+    mocap_mutex_unlock(s->lock);
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Reader thread: device -> byte ring.                                                        */
+
+static void reader_main(void *arg)
+{
+    mocap_session *s = (mocap_session *)arg;
+    uint8_t overflow[BYTE_CHUNK_CAPACITY];
+    char error_text[256];
+    int connected = 1;
+
+    while (!mocap_atomic_load_int(&s->stop)) {
+        if (!connected) {
+            mocap_status st = transport_reopen(s->source);
+            if (st == MOCAP_OK) {
+                connected = 1;
+                mocap_atomic_add_u64(&s->reconnects, 1);
+                mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_CONNECTED);
+                continue;
+            }
+            for (int waited = 0; waited < RECONNECT_INTERVAL_MS && !mocap_atomic_load_int(&s->stop);
+                 waited += 10)
+                mocap_sleep_ms(10);
+            continue;
+        }
+
+        byte_chunk *chunk = (byte_chunk *)spsc_ring_reserve(&s->bytes);
+        if (!chunk && s->replay_fast) {
+            mocap_sleep_ms(IDLE_SLEEP_MS); /* processing is behind: wait, lose nothing */
+            continue;
+        }
+        uint8_t *target = chunk ? chunk->data : overflow;
+        size_t got = 0;
+        int64_t receive_ns = 0;
+        mocap_status st = transport_read(s->source, target, BYTE_CHUNK_CAPACITY, READ_TIMEOUT_MS,
+                                         &got, &receive_ns);
+        if (st == MOCAP_OK) {
+            mocap_atomic_add_u64(&s->bytes_received, got);
+            if (chunk) {
+                chunk->receive_ns = receive_ns;
+                chunk->length = (uint32_t)got;
+                chunk->end_of_stream = 0;
+                spsc_ring_commit(&s->bytes);
+            } else {
+                mocap_atomic_add_u64(&s->bytes_dropped, got);
+            }
+        } else if (st == MOCAP_ERR_TIMEOUT) {
+            continue;
+        } else if (st == MOCAP_ERR_END_OF_STREAM) {
+            while (!mocap_atomic_load_int(&s->stop)) {
+                byte_chunk *end = (byte_chunk *)spsc_ring_reserve(&s->bytes);
+                if (end) {
+                    end->length = 0;
+                    end->end_of_stream = 1;
+                    end->receive_ns = 0;
+                    spsc_ring_commit(&s->bytes);
+                    break;
+                }
+                mocap_sleep_ms(IDLE_SLEEP_MS);
+            }
+            return;
+        } else {
+            mocap_copy_error(error_text, sizeof error_text);
+            set_async_error(s, error_text);
+            mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_DISCONNECTED);
+            if (!s->config.auto_reconnect || s->config.source_kind == MOCAP_SOURCE_REPLAY) return;
+            connected = 0;
+        }
+    }
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Processing thread: byte ring -> pipeline -> frame ring.                                    */
+
+static void deliver_frame(void *user, const mocap_frame *frame)
+{
+    mocap_session *s = (mocap_session *)user;
+    for (;;) {
+        mocap_frame *slot = (mocap_frame *)spsc_ring_reserve(&s->frames);
+        if (slot) {
+            *slot = *frame;
+            spsc_ring_commit(&s->frames);
+            return;
+        }
+        /* Full. A fast replay waits for the consumer (nothing is lost); live data cannot wait. */
+        if (!s->replay_fast || mocap_atomic_load_int(&s->stop)) {
+            mocap_atomic_add_u64(&s->frames_dropped, 1);
+            return;
+        }
+        mocap_sleep_ms(IDLE_SLEEP_MS);
+    }
+}
+
+static void publish_snapshots(mocap_session *s)
+{
+    pipeline *p = s->pipe;
+    mocap_mutex_lock(s->lock);
+    uint32_t handed = 0;
+    while (handed < s->pending_count &&
+           pipeline_calibration_schedule(p, s->pending[handed].step, s->pending[handed].start_s,
+                                         s->pending[handed].duration_s) == MOCAP_OK)
+        ++handed;
+    if (handed > 0) {
+        memmove(&s->pending[0], &s->pending[handed], (s->pending_count - handed) * sizeof s->pending[0]);
+        s->pending_count -= handed;
+    }
+    if (s->calibration_set_pending) {
+        p->calibration = s->calibration_to_set;
+        s->calibration_set_pending = 0;
+    }
+    s->calibration_snapshot = p->calibration;
+    s->report_snapshot = p->report;
+    memcpy(s->step_report_snapshot, p->step_reports, sizeof s->step_report_snapshot);
+    /* Requests still waiting here are not visible in the pipeline's reports yet. */
+    for (uint32_t i = 0; i < s->pending_count; ++i) {
+        mocap_calibration_report *r = &s->step_report_snapshot[s->pending[i].step];
+        memset(r, 0, sizeof *r);
+        r->step = s->pending[i].step;
+        r->state = MOCAP_CALIBRATION_WAITING;
+        r->seconds_remaining = s->pending[i].duration_s;
+    }
+    mocap_session_stats *st = &s->stats_snapshot;
+    st->frames_decoded = p->decoder.stats.frames_ok;
+    st->crc_failures = p->decoder.stats.crc_failures;
+    st->bytes_skipped = p->decoder.stats.bytes_skipped;
+    st->unknown_packets = p->decoder.stats.unknown_tags;
+    st->samples_decoded = p->counters.samples_decoded;
+    st->samples_rejected = p->counters.samples_rejected;
+    st->frames_emitted = p->counters.frames_emitted;
+    st->sensors_seen_mask = p->counters.sensors_seen_mask;
+    if (s->capture) st->capture_bytes_written = capture_writer_bytes_written(s->capture);
+    mocap_mutex_unlock(s->lock);
+}
+
+static void record_capture_error(mocap_session *s, mocap_status status)
+{
+    char text[200]; /* leaves room for the prefix in async_error */
+    mocap_copy_error(text, sizeof text);
+    mocap_mutex_lock(s->lock);
+    s->stats_snapshot.capture_error = status;
+    snprintf(s->async_error, sizeof s->async_error, "recording stopped: %s", text);
+    mocap_mutex_unlock(s->lock);
+    /* Processing goes on without the recording: losing live data for a full disk is worse. */
+    capture_writer_close(s->capture);
+    s->capture = NULL;
+}
+
+static void processor_main(void *arg)
+{
+    mocap_session *s = (mocap_session *)arg;
+    int ended = 0;
+    int64_t last_snapshot_ns = 0;
+    publish_snapshots(s);
+    while (!ended) {
+        int worked = 0;
+        const byte_chunk *chunk;
+        while ((chunk = (const byte_chunk *)spsc_ring_peek(&s->bytes)) != NULL) {
+            if (chunk->end_of_stream) {
+                ended = 1;
+                spsc_ring_release(&s->bytes);
+                break;
+            }
+            if (s->capture) {
+                mocap_status st = capture_writer_append(s->capture, chunk->receive_ns, chunk->data,
+                                                        chunk->length);
+                if (st != MOCAP_OK) record_capture_error(s, st);
+            }
+            pipeline_feed(s->pipe, chunk->data, chunk->length, chunk->receive_ns);
+            spsc_ring_release(&s->bytes);
+            worked = 1;
+            /* Keep calibration requests and stats responsive during a fast replay. */
+            int64_t now = mocap_monotonic_ns();
+            if (now - last_snapshot_ns > 5000000) {
+                publish_snapshots(s);
+                last_snapshot_ns = now;
+            }
+        }
+        int64_t now_ns = mocap_monotonic_ns();
+        if (!s->replay_fast) pipeline_advance(s->pipe, now_ns); /* emit frames late sensors held up */
+        if (s->capture) {
+            mocap_status st = capture_writer_poll(s->capture, now_ns);
+            if (st != MOCAP_OK) record_capture_error(s, st);
+        }
+        publish_snapshots(s);
+        last_snapshot_ns = now_ns;
+        if (ended) {
+            /* Let the frames that waited for late sensors out, then report the end. */
+            pipeline_finish(s->pipe, s->pipe->newest_receive_ns + 2000000000LL);
+            publish_snapshots(s);
+            mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_ENDED);
+            break;
+        }
+        if (mocap_atomic_load_int(&s->stop)) break;
+        if (!worked) mocap_sleep_ms(IDLE_SLEEP_MS);
+    }
+    if (s->capture) {
+        mocap_status st = capture_writer_flush(s->capture);
+        if (st != MOCAP_OK) record_capture_error(s, st);
+    }
+    mocap_atomic_store_int(&s->processing_done, 1);
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Public API                                                                                 */
+
+static void session_free(mocap_session *s)
+{
+    if (!s) return;
+    if (s->capture) capture_writer_close(s->capture);
+    if (s->source) transport_close(s->source);
+    spsc_ring_destroy(&s->bytes);
+    spsc_ring_destroy(&s->frames);
+    if (s->lock) mocap_mutex_destroy(s->lock);
+    free(s->pipe);
+    free(s);
+}
+
+static int64_t live_clock(void) { return mocap_monotonic_ns(); }
+
+mocap_status mocap_session_open(const mocap_session_config *config, mocap_session **out)
+{
+    if (!out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "out is NULL");
+    *out = NULL;
+    mocap_status st = pipeline_validate_config(config);
+    if (st != MOCAP_OK) return st;
+
+    mocap_session *s = (mocap_session *)calloc(1, sizeof *s);
+    if (!s) return mocap_fail(MOCAP_ERR_NO_MEMORY, "out of memory allocating a session");
+    s->config = *config;
+    s->pipe = (pipeline *)calloc(1, sizeof *s->pipe);
+    if (!s->pipe || mocap_mutex_create(&s->lock) != 0 ||
+        spsc_ring_init(&s->bytes, sizeof(byte_chunk), BYTE_RING_CHUNKS) != 0 ||
+        spsc_ring_init(&s->frames, sizeof(mocap_frame), FRAME_RING_FRAMES) != 0) {
+        session_free(s);
+        return mocap_fail(MOCAP_ERR_NO_MEMORY, "out of memory allocating session buffers");
+    }
+
+    switch (config->source_kind) {
+    case MOCAP_SOURCE_SERIAL:
+        st = transport_open_serial(config->path, config->baud, &s->source);
+        break;
+    case MOCAP_SOURCE_HID:
+        st = transport_open_hid(config->path, config->hid_vendor_id, config->hid_product_id,
+                                &s->source);
+        break;
+    case MOCAP_SOURCE_REPLAY:
+        if (!(config->replay_speed > 0.0f) || !isfinite(config->replay_speed)) {
+            session_free(s);
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "replay_speed must be positive");
+        }
+        st = transport_open_replay(config->path, config->replay_realtime, config->replay_speed,
+                                   &s->source);
+        s->replay_fast = !config->replay_realtime;
+        break;
+    default:
+        session_free(s);
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "source_kind %d is unknown",
+                          config->source_kind);
+    }
+    if (st != MOCAP_OK) {
+        session_free(s); /* keeps the transport's error text: nothing below fails */
+        return st;
+    }
+    if (config->capture_path[0] != '\0') {
+        st = capture_writer_open_with_source(config->capture_path, s->source->description,
+                                            &s->capture);
+        if (st != MOCAP_OK) {
+            session_free(s);
+            return st;
+        }
+    }
+    pipeline_init(s->pipe, config, deliver_frame, s);
+    if (!s->replay_fast) s->pipe->clock_ns = live_clock;
+    mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_CONNECTED);
+    publish_snapshots(s);
+    *out = s;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_session_start(mocap_session *s)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session is NULL");
+    if (s->started) return mocap_fail(MOCAP_ERR_STATE, "session already started");
+    if (mocap_thread_start(&s->processor, processor_main, s, "mocap-process") != 0)
+        return mocap_fail(MOCAP_ERR_NO_MEMORY, "could not start the processing thread");
+    if (mocap_thread_start(&s->reader, reader_main, s, "mocap-reader") != 0) {
+        mocap_atomic_store_int(&s->stop, 1);
+        mocap_thread_join(s->processor);
+        s->processor = NULL;
+        return mocap_fail(MOCAP_ERR_NO_MEMORY, "could not start the reader thread");
+    }
+    s->started = 1;
+    return MOCAP_OK;
+}
+
+void mocap_session_close(mocap_session *s)
+{
+    if (!s) return;
+    mocap_atomic_store_int(&s->stop, 1);
+    if (s->reader) mocap_thread_join(s->reader);
+    if (s->processor) mocap_thread_join(s->processor);
+    session_free(s);
+}
+
+static mocap_status end_or_no_data(mocap_session *s)
+{
+    if (mocap_atomic_load_int(&s->processing_done) &&
+        mocap_atomic_load_int(&s->connection_state) == MOCAP_CONNECTION_ENDED &&
+        spsc_ring_size(&s->frames) == 0)
+        return mocap_fail(MOCAP_ERR_END_OF_STREAM, "replay finished");
+    return MOCAP_ERR_NO_DATA;
+}
+
+mocap_status mocap_session_poll_latest(mocap_session *s, mocap_frame *out)
+{
+    if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or out is NULL");
+    int got = 0;
+    const mocap_frame *f;
+    while ((f = (const mocap_frame *)spsc_ring_peek(&s->frames)) != NULL) {
+        s->latest = *f;
+        spsc_ring_release(&s->frames);
+        got = 1;
+    }
+    if (!got) return end_or_no_data(s);
+    s->have_latest = 1;
+    *out = s->latest;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_session_drain(mocap_session *s, mocap_frame *out, uint32_t capacity,
+                                 uint32_t *count)
+{
+    if (!s || !out || !count)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session, out or count is NULL");
+    uint32_t n = 0;
+    while (n < capacity && spsc_ring_pop(&s->frames, &out[n]) == 0) ++n;
+    *count = n;
+    if (n == 0) return end_or_no_data(s);
+    s->latest = out[n - 1];
+    s->have_latest = 1;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_session_get_stats(mocap_session *s, mocap_session_stats *out)
+{
+    if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or out is NULL");
+    mocap_mutex_lock(s->lock);
+    *out = s->stats_snapshot;
+    snprintf(out->last_error, sizeof out->last_error, "%s", s->async_error);
+    mocap_mutex_unlock(s->lock);
+    out->bytes_received = mocap_atomic_load_u64(&s->bytes_received);
+    out->bytes_dropped = mocap_atomic_load_u64(&s->bytes_dropped);
+    out->frames_dropped = mocap_atomic_load_u64(&s->frames_dropped);
+    out->reconnects = mocap_atomic_load_u64(&s->reconnects);
+    out->connection_state = mocap_atomic_load_int(&s->connection_state);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_calibration_schedule(mocap_session *s, int32_t step, double start_s,
+                                        float duration_s)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session is NULL");
+    if (step < MOCAP_CALIBRATION_HEADING || step > MOCAP_CALIBRATION_HEADING_RESET)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration step %d is unknown", step);
+    if (!(duration_s >= 0.2f && duration_s <= 15.0f))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                          "calibration duration %g s is outside 0.2..15 s", (double)duration_s);
+    if (!isfinite(start_s))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration start time is not finite");
+    mocap_mutex_lock(s->lock);
+    if (s->pending_count >= PENDING_CALIBRATION_REQUESTS) {
+        mocap_mutex_unlock(s->lock);
+        return mocap_fail(MOCAP_ERR_STATE, "%d calibration steps are already waiting",
+                          PENDING_CALIBRATION_REQUESTS);
+    }
+    calibration_request r = {step, start_s, duration_s};
+    s->pending[s->pending_count++] = r;
+    mocap_mutex_unlock(s->lock);
+    if (!s->started) publish_snapshots(s);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_calibration_get_report(mocap_session *s, mocap_calibration_report *out)
+{
+    if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or out is NULL");
+    mocap_mutex_lock(s->lock);
+    *out = s->report_snapshot;
+    mocap_mutex_unlock(s->lock);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_calibration_get_step_report(mocap_session *s, int32_t step,
+                                               mocap_calibration_report *out)
+{
+    if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or out is NULL");
+    if (step < MOCAP_CALIBRATION_HEADING || step > MOCAP_CALIBRATION_HEADING_RESET)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration step %d is unknown", step);
+    mocap_mutex_lock(s->lock);
+    *out = s->step_report_snapshot[step];
+    mocap_mutex_unlock(s->lock);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_calibration_get(mocap_session *s, mocap_calibration *out)
+{
+    if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or out is NULL");
+    mocap_mutex_lock(s->lock);
+    *out = s->calibration_set_pending ? s->calibration_to_set : s->calibration_snapshot;
+    mocap_mutex_unlock(s->lock);
+    return MOCAP_OK;
+}
+
+static mocap_status check_calibration(const mocap_calibration *cal)
+{
+    if (cal->struct_size != sizeof(mocap_calibration))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                          "calibration struct_size is %u, this library expects %u",
+                          (unsigned)cal->struct_size, (unsigned)sizeof(mocap_calibration));
+    const float *values = &cal->world_to_model[0][0];
+    size_t n = sizeof cal->world_to_model / sizeof(float);
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(values[i])) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration has NaN/Inf");
+    values = &cal->sensor_to_bone[0][0];
+    n = sizeof cal->sensor_to_bone / sizeof(float);
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(values[i])) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration has NaN/Inf");
+    values = &cal->acceleration_offset[0][0];
+    n = sizeof cal->acceleration_offset / sizeof(float);
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(values[i])) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration has NaN/Inf");
+    return MOCAP_OK;
+}
+
+mocap_status mocap_calibration_set(mocap_session *s, const mocap_calibration *cal)
+{
+    if (!s || !cal) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or calibration is NULL");
+    mocap_status st = check_calibration(cal);
+    if (st != MOCAP_OK) return st;
+    mocap_mutex_lock(s->lock);
+    s->calibration_to_set = *cal;
+    s->calibration_set_pending = 1;
+    mocap_mutex_unlock(s->lock);
+    if (!s->started) publish_snapshots(s);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_calibration_save(const mocap_calibration *cal, const char *path)
+{
+    if (!cal || !path) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration or path is NULL");
+    mocap_status st = check_calibration(cal);
+    if (st != MOCAP_OK) return st;
+    return calib_save(cal, path);
+}
+
+mocap_status mocap_calibration_load(const char *path, mocap_calibration *out)
+{
+    if (!out || !path) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "path or out is NULL");
+    return calib_load(path, out);
+}

@@ -1,0 +1,106 @@
+/* Version information and the layout table bindings use to check their struct mirrors. */
+#include <stddef.h>
+
+#include "mocap_imu.h"
+
+#ifndef MOCAP_VERSION_STRING
+#define MOCAP_VERSION_STRING "0.0.0"
+#endif
+
+int32_t mocap_api_version(void) { return MOCAP_API_VERSION; }
+const char *mocap_version_string(void) { return MOCAP_VERSION_STRING; }
+
+#define STRUCT_ROW(type) {#type, "", 0, (uint32_t)sizeof(type)}
+#define FIELD_ROW(type, field) \
+    {#type, #field, (uint32_t)offsetof(type, field), (uint32_t)sizeof(((type *)0)->field)}
+
+static const mocap_field_layout layout_table[] = {
+    STRUCT_ROW(mocap_sensor_frame),
+    FIELD_ROW(mocap_sensor_frame, bone_orientation),
+    FIELD_ROW(mocap_sensor_frame, bone_acceleration),
+    FIELD_ROW(mocap_sensor_frame, sensor_orientation),
+    FIELD_ROW(mocap_sensor_frame, world_specific_force),
+    FIELD_ROW(mocap_sensor_frame, angular_rate),
+    FIELD_ROW(mocap_sensor_frame, age_s),
+    FIELD_ROW(mocap_sensor_frame, flags),
+    FIELD_ROW(mocap_sensor_frame, node_id),
+
+    STRUCT_ROW(mocap_frame),
+    FIELD_ROW(mocap_frame, sequence),
+    FIELD_ROW(mocap_frame, time_s),
+    FIELD_ROW(mocap_frame, newest_receive_ns),
+    FIELD_ROW(mocap_frame, emitted_ns),
+    FIELD_ROW(mocap_frame, flags),
+    FIELD_ROW(mocap_frame, fresh_mask),
+    FIELD_ROW(mocap_frame, sensors),
+
+    STRUCT_ROW(mocap_session_config),
+    FIELD_ROW(mocap_session_config, struct_size),
+    FIELD_ROW(mocap_session_config, source_kind),
+    FIELD_ROW(mocap_session_config, path),
+    FIELD_ROW(mocap_session_config, baud),
+    FIELD_ROW(mocap_session_config, hid_vendor_id),
+    FIELD_ROW(mocap_session_config, hid_product_id),
+    FIELD_ROW(mocap_session_config, node_ids),
+    FIELD_ROW(mocap_session_config, imusol_layout),
+    FIELD_ROW(mocap_session_config, world_frame),
+    FIELD_ROW(mocap_session_config, output_rate_hz),
+    FIELD_ROW(mocap_session_config, hold_latency_s),
+    FIELD_ROW(mocap_session_config, stale_after_s),
+    FIELD_ROW(mocap_session_config, kalman_process_noise),
+    FIELD_ROW(mocap_session_config, kalman_measurement_noise),
+    FIELD_ROW(mocap_session_config, replay_realtime),
+    FIELD_ROW(mocap_session_config, replay_speed),
+    FIELD_ROW(mocap_session_config, auto_reconnect),
+    FIELD_ROW(mocap_session_config, capture_path),
+
+    STRUCT_ROW(mocap_session_stats),
+    FIELD_ROW(mocap_session_stats, bytes_received),
+    FIELD_ROW(mocap_session_stats, frames_decoded),
+    FIELD_ROW(mocap_session_stats, crc_failures),
+    FIELD_ROW(mocap_session_stats, bytes_skipped),
+    FIELD_ROW(mocap_session_stats, unknown_packets),
+    FIELD_ROW(mocap_session_stats, samples_decoded),
+    FIELD_ROW(mocap_session_stats, samples_rejected),
+    FIELD_ROW(mocap_session_stats, frames_emitted),
+    FIELD_ROW(mocap_session_stats, frames_dropped),
+    FIELD_ROW(mocap_session_stats, bytes_dropped),
+    FIELD_ROW(mocap_session_stats, reconnects),
+    FIELD_ROW(mocap_session_stats, capture_bytes_written),
+    FIELD_ROW(mocap_session_stats, connection_state),
+    FIELD_ROW(mocap_session_stats, capture_error),
+    FIELD_ROW(mocap_session_stats, sensors_seen_mask),
+    FIELD_ROW(mocap_session_stats, reserved),
+    FIELD_ROW(mocap_session_stats, last_error),
+
+    STRUCT_ROW(mocap_sensor_quality),
+    FIELD_ROW(mocap_sensor_quality, gyro_rms_dps),
+    FIELD_ROW(mocap_sensor_quality, orientation_spread_deg),
+    FIELD_ROW(mocap_sensor_quality, accel_norm_error),
+    FIELD_ROW(mocap_sensor_quality, tilt_deg),
+    FIELD_ROW(mocap_sensor_quality, samples),
+    FIELD_ROW(mocap_sensor_quality, ok),
+
+    STRUCT_ROW(mocap_calibration_report),
+    FIELD_ROW(mocap_calibration_report, step),
+    FIELD_ROW(mocap_calibration_report, state),
+    FIELD_ROW(mocap_calibration_report, progress),
+    FIELD_ROW(mocap_calibration_report, seconds_remaining),
+    FIELD_ROW(mocap_calibration_report, sensors),
+    FIELD_ROW(mocap_calibration_report, reason),
+
+    STRUCT_ROW(mocap_calibration),
+    FIELD_ROW(mocap_calibration, struct_size),
+    FIELD_ROW(mocap_calibration, valid_mask),
+    FIELD_ROW(mocap_calibration, heading_mask),
+    FIELD_ROW(mocap_calibration, reserved),
+    FIELD_ROW(mocap_calibration, world_to_model),
+    FIELD_ROW(mocap_calibration, sensor_to_bone),
+    FIELD_ROW(mocap_calibration, acceleration_offset),
+};
+
+const mocap_field_layout *mocap_struct_layout(uint32_t *count)
+{
+    if (count) *count = (uint32_t)(sizeof layout_table / sizeof layout_table[0]);
+    return layout_table;
+}

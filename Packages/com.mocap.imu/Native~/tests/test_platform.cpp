@@ -1,0 +1,128 @@
+// Threads, mutexes and the monotonic clock of platform.h.
+#include <gtest/gtest.h>
+
+#include <atomic> // before platform.h: g++ needs it for _Atomic in C++ mode
+#include <cstring>
+#include <string>
+#include <vector>
+
+extern "C" {
+#include "error.h"
+#include "platform.h"
+}
+
+#if defined(__linux__)
+#include <pthread.h>
+#endif
+
+namespace {
+
+struct ThreadProbe {
+    int input = 0;
+    int output = 0;
+    char name[32] = {0};
+};
+
+void probe_fn(void *arg)
+{
+    auto *probe = static_cast<ThreadProbe *>(arg);
+    probe->output = probe->input * 3;
+#if defined(__linux__)
+    pthread_getname_np(pthread_self(), probe->name, sizeof probe->name);
+#endif
+}
+
+struct CounterShared {
+    mocap_mutex *mutex = nullptr;
+    long counter = 0; // deliberately not atomic: only the mutex protects it
+    int iterations = 0;
+};
+
+void counter_fn(void *arg)
+{
+    auto *shared = static_cast<CounterShared *>(arg);
+    for (int i = 0; i < shared->iterations; ++i) {
+        mocap_mutex_lock(shared->mutex);
+        long value = shared->counter;
+        shared->counter = value + 1;
+        mocap_mutex_unlock(shared->mutex);
+    }
+}
+
+} // namespace
+
+TEST(Platform, ThreadRunsWithArgumentAndJoins)
+{
+    ThreadProbe probe;
+    probe.input = 14;
+    mocap_thread *thread = nullptr;
+    ASSERT_EQ(mocap_thread_start(&thread, probe_fn, &probe, "mocap-probe"), MOCAP_OK);
+    ASSERT_NE(thread, nullptr);
+    mocap_thread_join(thread);
+    EXPECT_EQ(probe.output, 42);
+#if defined(__linux__)
+    EXPECT_STREQ(probe.name, "mocap-probe");
+#endif
+}
+
+#if defined(__linux__)
+TEST(Platform, LongThreadNameIsTruncatedNotRefused)
+{
+    ThreadProbe probe;
+    mocap_thread *thread = nullptr;
+    ASSERT_EQ(mocap_thread_start(&thread, probe_fn, &probe, "mocap-reader-thread-long-name"),
+              MOCAP_OK);
+    mocap_thread_join(thread);
+    EXPECT_EQ(std::string(probe.name), std::string("mocap-reader-thread-long-name").substr(0, 15));
+}
+#endif
+
+TEST(Platform, ThreadStartRejectsNullFunction)
+{
+    mocap_thread *thread = reinterpret_cast<mocap_thread *>(0x1);
+    EXPECT_NE(mocap_thread_start(&thread, nullptr, nullptr, "x"), MOCAP_OK);
+    EXPECT_EQ(thread, nullptr);
+    EXPECT_STRNE(mocap_last_error(), "");
+}
+
+TEST(Platform, MutexExcludesConcurrentIncrements)
+{
+    CounterShared shared;
+    shared.iterations = 50000;
+    ASSERT_EQ(mocap_mutex_create(&shared.mutex), MOCAP_OK);
+    const int thread_count = 4;
+    std::vector<mocap_thread *> threads(thread_count, nullptr);
+    for (auto &t : threads) ASSERT_EQ(mocap_thread_start(&t, counter_fn, &shared, "counter"), MOCAP_OK);
+    for (auto *t : threads) mocap_thread_join(t);
+    EXPECT_EQ(shared.counter, static_cast<long>(thread_count) * shared.iterations);
+    mocap_mutex_destroy(shared.mutex);
+}
+
+TEST(Platform, MonotonicClockAdvancesAcrossSleep)
+{
+    const int64_t before = mocap_monotonic_ns();
+    mocap_sleep_ms(30);
+    const int64_t after = mocap_monotonic_ns();
+    // The sleep is a lower bound; scheduling can only make it longer.
+    EXPECT_GE(after - before, 30LL * 1000000LL);
+    EXPECT_LT(after - before, 5LL * 1000000000LL);
+}
+
+TEST(Platform, MonotonicClockNeverGoesBackwards)
+{
+    int64_t previous = mocap_monotonic_ns();
+    EXPECT_GT(previous, 0);
+    for (int i = 0; i < 100000; ++i) {
+        const int64_t now = mocap_monotonic_ns();
+        ASSERT_GE(now, previous);
+        previous = now;
+    }
+}
+
+TEST(Platform, SleepOfZeroOrLessReturnsImmediately)
+{
+    const int64_t before = mocap_monotonic_ns();
+    mocap_sleep_ms(0);
+    mocap_sleep_ms(-5);
+    EXPECT_LT(mocap_monotonic_ns() - before, 1000000000LL);
+}

@@ -1,0 +1,560 @@
+// The threaded session through the public API: a replayed capture, and a live stream written in
+// real time into a real pseudo-terminal (the engine opens the slave as its serial port; closing
+// the master is an unplug).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <thread>
+
+#include <csignal>
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include "e2e_support.h"
+#include "test_support.h"
+
+extern "C" {
+#include "capture_file.h"
+#include "hipnuc_decoder.h"
+#include "platform.h"
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0)
+{
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// A pseudo-terminal standing in for the receiver; `link` is a stable symlink to the slave, as
+// udev gives /dev/serial/by-id/..., so an unplug + replug can bring it back at the same path.
+struct FakeReceiver {
+    int master = -1;
+    std::string link;
+
+    explicit FakeReceiver(const std::string &link_path) : link(link_path) { plug(); }
+    ~FakeReceiver() { unplug(); }
+
+    void plug()
+    {
+        int slave = -1;
+        char name[256];
+        struct termios raw;
+        cfmakeraw(&raw);
+        if (openpty(&master, &slave, name, &raw, nullptr) != 0) throw std::runtime_error("openpty");
+        close(slave);  // the engine opens it by name
+        std::filesystem::remove(link);
+        std::filesystem::create_symlink(name, link);
+    }
+    void unplug()
+    {
+        if (master >= 0) close(master);
+        master = -1;
+    }
+    bool write_all(const uint8_t *data, size_t len)
+    {
+        while (len > 0) {
+            ssize_t n = ::write(master, data, len);
+            if (n < 0) {
+                if (errno == EINTR) continue;
+                if (errno == EAGAIN) {
+                    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+                    continue;
+                }
+                return false;
+            }
+            data += n;
+            len -= (size_t)n;
+        }
+        return true;
+    }
+};
+
+mocap_session_config serial_config(const std::string &port)
+{
+    mocap_session_config c;
+    mocap_config_defaults(&c);
+    c.source_kind = MOCAP_SOURCE_SERIAL;
+    snprintf(c.path, sizeof c.path, "%s", port.c_str());
+    c.baud = 460800;
+    return c;
+}
+
+mocap_session_config replay_config(const std::string &path)
+{
+    mocap_session_config c;
+    mocap_config_defaults(&c);
+    c.source_kind = MOCAP_SOURCE_REPLAY;
+    snprintf(c.path, sizeof c.path, "%s", path.c_str());
+    return c;
+}
+
+struct SessionCloser {
+    mocap_session *s = nullptr;
+    ~SessionCloser() { mocap_session_close(s); }
+};
+
+// Drains frames until pred(stats, last frame) holds or the timeout passes.
+template <typename Pred>
+bool wait_until(mocap_session *s, double timeout_s, std::vector<mocap_frame> *frames, Pred pred)
+{
+    auto t0 = Clock::now();
+    std::vector<mocap_frame> buf(64);
+    while (seconds_since(t0) < timeout_s) {
+        uint32_t n = 0;
+        mocap_session_drain(s, buf.data(), (uint32_t)buf.size(), &n);
+        if (frames) frames->insert(frames->end(), buf.begin(), buf.begin() + n);
+        mocap_session_stats st;
+        mocap_session_get_stats(s, &st);
+        if (pred(st)) return true;
+        if (n == 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return false;
+}
+
+bool wait_for_calibration(mocap_session *s, double timeout_s, std::vector<mocap_frame> *frames,
+                          mocap_calibration_report &rep)
+{
+    return wait_until(s, timeout_s, frames, [&](const mocap_session_stats &) {
+        mocap_calibration_get_report(s, &rep);
+        return rep.state == MOCAP_CALIBRATION_ACCEPTED || rep.state == MOCAP_CALIBRATION_REFUSED;
+    });
+}
+
+}  // namespace
+
+TEST(Session, ReplayEndToEndMatchesTruthAndEnds)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 21;
+    cfg.motion_s = 8.0;
+    add_realistic_noise(cfg);
+    std::string capture = test_temp_path("walk.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("mixed"), nullptr, capture.c_str(), nullptr),
+              MOCAP_OK) << mocap_last_error();
+    auto packets = generate(cfg);  // same seed: the same stream, with its truth
+    TruthTrack truth(cfg, packets);
+
+    mocap_session_config config = replay_config(capture);
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    // Both prelude windows are scheduled before the start: a fast replay outruns any caller.
+    double t0 = synth_session_time(&cfg, 0.0);
+    ASSERT_EQ(mocap_calibration_schedule(session.s, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
+                                         (float)(cfg.heading_s - 1.0)), MOCAP_OK);
+    ASSERT_EQ(mocap_calibration_schedule(session.s, MOCAP_CALIBRATION_TPOSE,
+                                         t0 + cfg.heading_s + cfg.strap_s + 0.5,
+                                         (float)(cfg.tpose_s - 1.0)), MOCAP_OK);
+    mocap_calibration_report rep;
+    ASSERT_EQ(mocap_calibration_get_step_report(session.s, MOCAP_CALIBRATION_TPOSE, &rep), MOCAP_OK);
+    EXPECT_EQ(rep.state, MOCAP_CALIBRATION_WAITING);
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+
+    std::vector<mocap_frame> frames;
+    ASSERT_TRUE(wait_until(session.s, 30, &frames, [&](const mocap_session_stats &) {
+        mocap_calibration_get_step_report(session.s, MOCAP_CALIBRATION_TPOSE, &rep);
+        return rep.state == MOCAP_CALIBRATION_ACCEPTED || rep.state == MOCAP_CALIBRATION_REFUSED;
+    }));
+    ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
+    ASSERT_EQ(mocap_calibration_get_step_report(session.s, MOCAP_CALIBRATION_HEADING, &rep), MOCAP_OK);
+    ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) EXPECT_TRUE(rep.sensors[s].ok);
+
+    // Drain to the end: the replay reports END_OF_STREAM once everything was delivered.
+    std::vector<mocap_frame> buf(128);
+    mocap_status st = MOCAP_OK;
+    auto start = Clock::now();
+    while (seconds_since(start) < 60) {
+        uint32_t n = 0;
+        st = mocap_session_drain(session.s, buf.data(), (uint32_t)buf.size(), &n);
+        frames.insert(frames.end(), buf.begin(), buf.begin() + n);
+        if (st == MOCAP_ERR_END_OF_STREAM) break;
+        if (n == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    ASSERT_EQ(st, MOCAP_ERR_END_OF_STREAM);
+    mocap_frame latest;
+    EXPECT_EQ(mocap_session_poll_latest(session.s, &latest), MOCAP_ERR_END_OF_STREAM);
+
+    // Every frame exactly once, in order, none dropped, covering the whole capture.
+    for (size_t i = 1; i < frames.size(); ++i) ASSERT_EQ(frames[i].sequence, frames[i - 1].sequence + 1);
+    // After the last sample, frames hold the last values until the sensors go stale (0.25 s).
+    const double duration = packets.back().info.t;
+    EXPECT_GE((double)frames.size(), duration * 60.0 - 2.0);
+    EXPECT_LE((double)frames.size(), (duration + config.stale_after_s) * 60.0 + 2.0);
+    mocap_session_stats stats;
+    ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
+    EXPECT_EQ(stats.frames_dropped, 0u);
+    EXPECT_EQ(stats.frames_decoded, packets.size());
+    EXPECT_EQ(stats.crc_failures, 0u);
+    EXPECT_EQ(stats.sensors_seen_mask, 0x3Fu);
+    EXPECT_EQ(stats.connection_state, MOCAP_CONNECTION_ENDED);
+
+    ErrorStats errors;
+    for (const auto &f : frames) score_frame(truth, f, errors);
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        SCOPED_TRACE(mocap_segment_name(s));
+        ASSERT_GT(errors.count(s), 400u);
+        EXPECT_LT(errors.mean(s), 1.0);
+    }
+}
+
+// Live: bytes written in real time into the pty, calibration steps triggered "now" as a user
+// would, then the motion recovered. Also records the stream and checks the recording.
+TEST(Session, LiveSerialPtyCalibratesAndTracksAndRecords)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 22;
+    cfg.heading_s = 1.5;
+    cfg.strap_s = 0.5;
+    cfg.tpose_s = 1.5;
+    cfg.motion_s = 3.0;
+    cfg.start_sensor_ms = 4294960000u;  // the sensor clock wraps during the test
+    add_realistic_noise(cfg);
+    auto packets = generate(cfg);
+    ASSERT_FALSE(packets.empty());
+
+    std::string dir = test_temp_dir();
+    FakeReceiver receiver(dir + "/ttyHIPNUC");
+    std::string record = dir + "/live.cap";
+    mocap_session_config config = serial_config(receiver.link);
+    snprintf(config.capture_path, sizeof config.capture_path, "%s", record.c_str());
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+
+    // The writer paces packets in real time and remembers when each was written (monotonic, the
+    // session's clock) so the truth can be placed on the session's time axis.
+    std::atomic<int> phase{-1};
+    std::atomic<bool> writer_ok{true};
+    std::vector<double> written_at(packets.size(), 0.0);
+    size_t total_bytes = 0;
+    for (const auto &p : packets) total_bytes += p.bytes.size();
+    std::thread writer([&] {
+        auto start = Clock::now();
+        for (size_t i = 0; i < packets.size(); ++i) {
+            std::this_thread::sleep_until(start + std::chrono::duration<double>(packets[i].info.t));
+            phase = packets[i].info.phase;
+            written_at[i] = (double)mocap_monotonic_ns() * 1e-9;
+            if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) writer_ok = false;
+        }
+        phase = 4;
+    });
+
+    std::vector<mocap_frame> frames;
+    mocap_calibration_report rep;
+    ASSERT_TRUE(wait_until(session.s, 5, &frames, [](const mocap_session_stats &st) {
+        return st.frames_emitted > 10;
+    }));
+    ASSERT_EQ(mocap_calibration_schedule(session.s, MOCAP_CALIBRATION_HEADING, -1.0, 0.8f), MOCAP_OK);
+    ASSERT_TRUE(wait_for_calibration(session.s, 5, &frames, rep));
+    ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
+    ASSERT_TRUE(wait_until(session.s, 5, &frames, [&](const mocap_session_stats &) { return phase >= 2; }));
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    ASSERT_EQ(mocap_calibration_schedule(session.s, MOCAP_CALIBRATION_TPOSE, -1.0, 0.8f), MOCAP_OK);
+    ASSERT_TRUE(wait_for_calibration(session.s, 5, &frames, rep));
+    ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
+    ASSERT_TRUE(wait_until(session.s, 10, &frames, [&](const mocap_session_stats &) { return phase == 4; }));
+    writer.join();
+    ASSERT_TRUE(writer_ok);
+    wait_until(session.s, 0.3, &frames, [](const mocap_session_stats &) { return false; });
+
+    // The session clock of stream time t is t plus the smallest write latency seen, as the
+    // engine's clock mapping does; transport latency (a pty: microseconds) adds to the error.
+    double offset = 1e30;
+    for (size_t i = 0; i < packets.size(); ++i) offset = std::min(offset, written_at[i] - packets[i].info.t);
+    synth_config shifted = cfg;
+    shifted.start_receive_ns = (int64_t)(offset * 1e9);
+    TruthTrack truth(shifted, packets);
+    ErrorStats errors;
+    for (const auto &f : frames) score_frame(truth, f, errors);
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        SCOPED_TRACE(mocap_segment_name(s));
+        ASSERT_GT(errors.count(s), 100u);
+        EXPECT_LT(errors.mean(s), 1.5);
+    }
+    mocap_session_stats stats;
+    mocap_session_get_stats(session.s, &stats);
+    EXPECT_EQ(stats.bytes_received, total_bytes);
+    EXPECT_EQ(stats.crc_failures, 0u);
+
+    // The recording holds exactly the bytes that crossed the wire.
+    mocap_session_close(session.s);
+    session.s = nullptr;
+    capture_reader *reader = nullptr;
+    ASSERT_EQ(capture_reader_open(record.c_str(), &reader), MOCAP_OK) << mocap_last_error();
+    std::vector<uint8_t> recorded, sent;
+    for (const auto &p : packets) sent.insert(sent.end(), p.bytes.begin(), p.bytes.end());
+    int64_t ns;
+    const uint8_t *data;
+    size_t len;
+    while (capture_reader_next(reader, &ns, &data, &len) == MOCAP_OK) recorded.insert(recorded.end(), data, data + len);
+    EXPECT_EQ(capture_reader_tail(reader), 0);
+    capture_reader_close(reader);
+    EXPECT_TRUE(recorded == sent);
+}
+
+// Unplug (master closed) surfaces within 1 s with the port named; replug at the same path
+// resumes frames without any call from the user.
+TEST(Session, UnplugIsReportedWithinOneSecondAndReplugResumes)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 23;
+    cfg.motion_s = 20.0;
+    auto packets = generate(cfg);
+    std::string dir = test_temp_dir();
+    FakeReceiver receiver(dir + "/ttyUSB-receiver");
+    mocap_session_config config = serial_config(receiver.link);
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+
+    std::atomic<bool> paused{false}, stop{false};
+    std::atomic<size_t> next{0};
+    std::mutex master_lock;
+    std::thread writer([&] {
+        while (!stop && next < packets.size()) {
+            if (!paused) {
+                std::lock_guard<std::mutex> g(master_lock);
+                if (receiver.master >= 0) receiver.write_all(packets[next].bytes.data(), packets[next].bytes.size());
+                next++;
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+    });
+
+    std::vector<mocap_frame> frames;
+    ASSERT_TRUE(wait_until(session.s, 5, &frames, [](const mocap_session_stats &st) { return st.frames_emitted > 30; }));
+
+    paused = true;
+    {
+        std::lock_guard<std::mutex> g(master_lock);
+        receiver.unplug();
+    }
+    auto unplugged_at = Clock::now();
+    bool noticed = wait_until(session.s, 5, nullptr, [](const mocap_session_stats &st) {
+        return st.connection_state == MOCAP_CONNECTION_DISCONNECTED;
+    });
+    double delay = seconds_since(unplugged_at);
+    ASSERT_TRUE(noticed);
+    EXPECT_LT(delay, 1.0);
+    mocap_session_stats stats;
+    mocap_session_get_stats(session.s, &stats);
+    EXPECT_NE(std::string(stats.last_error).find(receiver.link), std::string::npos) << stats.last_error;
+
+    uint64_t before = stats.frames_emitted;
+    {
+        std::lock_guard<std::mutex> g(master_lock);
+        receiver.plug();
+    }
+    paused = false;
+    ASSERT_TRUE(wait_until(session.s, 5, &frames, [&](const mocap_session_stats &st) {
+        return st.connection_state == MOCAP_CONNECTION_CONNECTED && st.frames_emitted > before + 30;
+    }));
+    mocap_session_get_stats(session.s, &stats);
+    EXPECT_EQ(stats.reconnects, 1u);
+    stop = true;
+    writer.join();
+    for (size_t i = 1; i < frames.size(); ++i) ASSERT_GT(frames[i].sequence, frames[i - 1].sequence);
+}
+
+TEST(Session, WrongPortNamesThePortAndTheCause)
+{
+    mocap_session_config config = serial_config("/dev/ttyDOES-NOT-EXIST");
+    mocap_session *s = nullptr;
+    EXPECT_EQ(mocap_session_open(&config, &s), MOCAP_ERR_NOT_FOUND);
+    EXPECT_EQ(s, nullptr);
+    std::string err = mocap_last_error();
+    EXPECT_NE(err.find("/dev/ttyDOES-NOT-EXIST"), std::string::npos) << err;
+
+    mocap_session_config replay = replay_config(test_temp_path("missing.cap"));
+    EXPECT_EQ(mocap_session_open(&replay, &s), MOCAP_ERR_NOT_FOUND);
+    EXPECT_NE(std::string(mocap_last_error()).find("missing.cap"), std::string::npos);
+}
+
+TEST(Session, RejectsBadConfigurationWithAReason)
+{
+    mocap_session_config c = serial_config("/dev/null");
+    c.struct_size = 12;
+    mocap_session *s = nullptr;
+    EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("struct_size"), std::string::npos);
+    c = serial_config("/dev/null");
+    c.node_ids[2] = c.node_ids[1];
+    EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("right_wrist"), std::string::npos) << mocap_last_error();
+    c = serial_config("/dev/null");
+    c.output_rate_hz = NAN;
+    EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_ERR_INVALID_ARGUMENT);
+}
+
+// Closing while the device is silent (the reader is inside a blocking wait) returns, and
+// closing a session that was never started too.
+TEST(Session, ClosesCleanlyWhileTheDeviceBlocks)
+{
+    std::string dir = test_temp_dir();
+    FakeReceiver receiver(dir + "/ttySilent");
+    for (int started = 0; started < 2; ++started) {
+        mocap_session_config config = serial_config(receiver.link);
+        mocap_session *s = nullptr;
+        ASSERT_EQ(mocap_session_open(&config, &s), MOCAP_OK) << mocap_last_error();
+        if (started) {
+            ASSERT_EQ(mocap_session_start(s), MOCAP_OK);
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        mocap_frame f;
+        EXPECT_EQ(mocap_session_poll_latest(s, &f), MOCAP_ERR_NO_DATA);
+        auto t0 = Clock::now();
+        mocap_session_close(s);
+        EXPECT_LT(seconds_since(t0), 5.0);  // a hang here would block forever
+    }
+}
+
+// NaN and non-unit quaternions from a broken sensor are rejected and counted; the other
+// sensors keep producing frames.
+TEST(Session, BadSamplesAreRejectedAndCountedWithoutStoppingOthers)
+{
+    std::string dir = test_temp_dir();
+    FakeReceiver receiver(dir + "/ttyNaN");
+    mocap_session_config config = serial_config(receiver.link);
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK);
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+
+    const int packets = 60;
+    for (int i = 0; i < packets; ++i) {
+        hipnuc_sample samples[MOCAP_SENSOR_COUNT];
+        std::memset(samples, 0, sizeof samples);
+        for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+            samples[s].node_id = (uint32_t)s;
+            samples[s].time_ms = 1000u + (uint32_t)i * 10u;
+            samples[s].acc_g[2] = 1.0f;
+            samples[s].quat[0] = 1.0f;
+        }
+        samples[1].quat[1] = NAN;             // left wrist: NaN
+        samples[2].quat[0] = 0.0f;            // right wrist: zero quaternion
+        samples[3].quat[0] = 1.7f;            // left shin: far from unit
+        samples[4].acc_g[0] = INFINITY;       // right shin: infinite acceleration
+        uint8_t payload[HIPNUC_MAX_PAYLOAD], frame[HIPNUC_MAX_PAYLOAD + 16];
+        size_t plen = hipnuc_encode_gwsol(1, samples, MOCAP_SENSOR_COUNT, payload, sizeof payload);
+        size_t flen = hipnuc_encode_frame(payload, plen, frame, sizeof frame);
+        ASSERT_GT(flen, 0u);
+        ASSERT_TRUE(receiver.write_all(frame, flen));
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    std::vector<mocap_frame> frames;
+    ASSERT_TRUE(wait_until(session.s, 5, &frames, [&](const mocap_session_stats &st) {
+        return st.samples_decoded + st.samples_rejected >= (uint64_t)packets * 6;
+    }));
+    wait_until(session.s, 0.3, &frames, [](const mocap_session_stats &) { return false; });
+    mocap_session_stats stats;
+    mocap_session_get_stats(session.s, &stats);
+    EXPECT_EQ(stats.samples_rejected, (uint64_t)packets * 4);
+    EXPECT_EQ(stats.samples_decoded, (uint64_t)packets * 2);
+    EXPECT_EQ(stats.sensors_seen_mask, (1u << 0) | (1u << 5));
+    ASSERT_GT(frames.size(), 10u);
+    const mocap_frame &f = frames.back();
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        for (int k = 0; k < 4; ++k) ASSERT_TRUE(std::isfinite(f.sensors[s].bone_orientation[k]));
+        for (int k = 0; k < 3; ++k) ASSERT_TRUE(std::isfinite(f.sensors[s].bone_acceleration[k]));
+    }
+}
+
+// A recording that cannot even start (a full device) fails the open with the file named.
+TEST(Session, RecordingToAFullDeviceFailsTheOpenClearly)
+{
+    std::string dir = test_temp_dir();
+    FakeReceiver receiver(dir + "/ttyFull");
+    mocap_session_config config = serial_config(receiver.link);
+    snprintf(config.capture_path, sizeof config.capture_path, "/dev/full");
+    mocap_session *s = nullptr;
+    EXPECT_EQ(mocap_session_open(&config, &s), MOCAP_ERR_IO);
+    EXPECT_EQ(s, nullptr);
+    EXPECT_NE(std::string(mocap_last_error()).find("/dev/full"), std::string::npos) << mocap_last_error();
+}
+
+// The disk filling up mid-session stops the recording with a clear error; tracking goes on.
+// A forked child gets a small file-size limit (the kernel's EFBIG stands in for ENOSPC) and
+// reports through its exit code.
+TEST(Session, DiskFullMidSessionStopsRecordingButNotTracking)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 24;
+    cfg.motion_s = 4.0;
+    auto packets = generate(cfg);
+    std::string dir = test_temp_dir();
+    std::string record = dir + "/limited.cap";
+    pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        struct rlimit limit = {40000, 40000};
+        signal(SIGXFSZ, SIG_IGN);
+        if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(10);
+        FakeReceiver receiver(dir + "/ttyLimited");
+        mocap_session_config config = serial_config(receiver.link);
+        snprintf(config.capture_path, sizeof config.capture_path, "%s", record.c_str());
+        mocap_session *s = nullptr;
+        if (mocap_session_open(&config, &s) != MOCAP_OK) _exit(11);
+        if (mocap_session_start(s) != MOCAP_OK) _exit(12);
+        for (size_t i = 0; i < packets.size(); ++i) {
+            if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) _exit(13);
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        mocap_session_stats stats;
+        mocap_session_get_stats(s, &stats);
+        int code = 0;
+        if (stats.capture_error != MOCAP_ERR_IO) code = 14;
+        else if (std::string(stats.last_error).find("limited.cap") == std::string::npos) code = 15;
+        else if (stats.samples_decoded < (packets.size() - 5) * 6) code = 16; // kept tracking
+        else if (stats.connection_state != MOCAP_CONNECTION_CONNECTED) code = 17;
+        mocap_session_close(s);
+        _exit(code);
+    }
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0) << "14: no capture error, 15: file not named, "
+                                         "16: tracking stopped, 17: connection lost";
+    // What reached the disk is still a readable capture.
+    capture_reader *reader = nullptr;
+    ASSERT_EQ(capture_reader_open(record.c_str(), &reader), MOCAP_OK) << mocap_last_error();
+    int64_t ns;
+    const uint8_t *data;
+    size_t len, records = 0;
+    while (capture_reader_next(reader, &ns, &data, &len) == MOCAP_OK) ++records;
+    EXPECT_GT(records, 10u);
+    capture_reader_close(reader);
+}
+
+TEST(Session, StructLayoutTableMatchesTheHeader)
+{
+    uint32_t n = 0;
+    const mocap_field_layout *rows = mocap_struct_layout(&n);
+    ASSERT_GT(n, 40u);
+    bool saw_frame = false;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (std::string(rows[i].struct_name) == "mocap_frame" && rows[i].field_name[0] == '\0') {
+            EXPECT_EQ(rows[i].size, sizeof(mocap_frame));
+            saw_frame = true;
+        }
+        if (std::string(rows[i].struct_name) == "mocap_frame" && std::string(rows[i].field_name) == "sensors") {
+            EXPECT_EQ(rows[i].offset, offsetof(mocap_frame, sensors));
+        }
+    }
+    EXPECT_TRUE(saw_frame);
+    EXPECT_EQ(mocap_api_version(), MOCAP_API_VERSION);
+}

@@ -1,0 +1,56 @@
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+std::string test_temp_dir()
+{
+    const auto *info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "global";
+    for (char &c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.') c = '_';
+    std::filesystem::path dir = std::filesystem::path(MOCAP_TEST_TMPDIR) / name;
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir.string();
+}
+
+std::string test_temp_path(const std::string &name)
+{
+    const auto *info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string test = info ? std::string(info->test_suite_name()) + "." + info->name() : "global";
+    for (char &c : test)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.') c = '_';
+    std::filesystem::path dir = std::filesystem::path(MOCAP_TEST_TMPDIR) / test;
+    std::filesystem::create_directories(dir);
+    return (dir / name).string();
+}
+
+std::vector<uint8_t> hex_bytes(const std::string &hex)
+{
+    std::vector<uint8_t> out;
+    std::string digits;
+    for (char c : hex)
+        if (std::isxdigit(static_cast<unsigned char>(c))) digits.push_back(c);
+    if (digits.size() % 2) throw std::invalid_argument("odd number of hex digits");
+    for (size_t i = 0; i < digits.size(); i += 2)
+        out.push_back(static_cast<uint8_t>(std::stoul(digits.substr(i, 2), nullptr, 16)));
+    return out;
+}
+
+std::vector<uint8_t> read_file_bytes(const std::string &path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void write_file_bytes(const std::string &path, const std::vector<uint8_t> &bytes)
+{
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char *>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}

@@ -1,0 +1,13 @@
+// Helpers shared by the GoogleTest suites.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+// A fresh, empty directory under the build tree for this test (named after the running test).
+std::string test_temp_dir();
+// Path of a file inside test_temp_dir().
+std::string test_temp_path(const std::string &name);
+std::vector<uint8_t> hex_bytes(const std::string &hex); // whitespace ignored
+std::vector<uint8_t> read_file_bytes(const std::string &path);
+void write_file_bytes(const std::string &path, const std::vector<uint8_t> &bytes);

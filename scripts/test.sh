@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# Runs every test suite of the project and ends with one line "N passed, N failed".
+#   engine:       ctest on a normal build, an ASan+UBSan build and (threading suites) a TSan build
+#   fuzz:         the HiPNUC decoder under libFuzzer for a bounded time
+#   python:       pytest over training/ (when it has tests)
+# Environment: MOCAP_FUZZ_SECONDS (default 60), MOCAP_SKIP_SANITIZERS=1 for a quick local run.
+set -uo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+NATIVE="$ROOT/Packages/com.mocap.imu/Native~"
+BUILD="$ROOT/build"
+JOBS="$(nproc 2>/dev/null || echo 2)"
+FUZZ_SECONDS="${MOCAP_FUZZ_SECONDS:-60}"
+
+"$ROOT/scripts/setup.sh" || { echo "setup failed"; echo "0 passed, 1 failed"; exit 1; }
+
+total_passed=0
+total_failed=0
+summary=()
+
+record() { # name passed failed
+  total_passed=$((total_passed + $2))
+  total_failed=$((total_failed + $3))
+  summary+=("$(printf '%-28s %5d passed, %d failed' "$1" "$2" "$3")")
+}
+
+# Runs ctest in a build dir and records its counts; a build failure counts as one failure.
+run_ctest_suite() { # name build_dir cmake_args... -- ctest_args...
+  local name="$1" dir="$2"; shift 2
+  local cmake_args=() ctest_args=()
+  while [ $# -gt 0 ] && [ "$1" != "--" ]; do cmake_args+=("$1"); shift; done
+  [ $# -gt 0 ] && shift
+  ctest_args=("$@")
+  echo "=== $name: configure + build ($dir)"
+  if ! cmake -S "$NATIVE" -B "$dir" "${cmake_args[@]}" >"$dir.configure.log" 2>&1; then
+    cat "$dir.configure.log"; record "$name (configure)" 0 1; return
+  fi
+  if ! cmake --build "$dir" -j"$JOBS" >"$dir.build.log" 2>&1; then
+    tail -50 "$dir.build.log"; record "$name (build)" 0 1; return
+  fi
+  echo "=== $name: ctest"
+  local log="$dir.ctest.log"
+  (cd "$dir" && ctest --output-on-failure -j"$JOBS" "${ctest_args[@]}") 2>&1 | tee "$log"
+  local line failed total
+  line="$(grep -E 'tests passed, [0-9]+ tests? failed out of [0-9]+' "$log" | tail -1)"
+  if [ -z "$line" ]; then
+    if grep -q "No tests were found" "$log"; then record "$name" 0 1; else record "$name" 0 1; fi
+    return
+  fi
+  failed="$(sed -E 's/.* ([0-9]+) tests? failed out of ([0-9]+).*/\1/' <<<"$line")"
+  total="$(sed -E 's/.* ([0-9]+) tests? failed out of ([0-9]+).*/\2/' <<<"$line")"
+  record "$name" $((total - failed)) "$failed"
+}
+
+mkdir -p "$BUILD"
+run_ctest_suite "engine (release)" "$BUILD/engine" -DCMAKE_BUILD_TYPE=RelWithDebInfo
+
+if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
+  run_ctest_suite "engine (asan+ubsan)" "$BUILD/engine-asan" -DCMAKE_BUILD_TYPE=Debug \
+    -DMOCAP_SANITIZE=address,undefined
+  run_ctest_suite "engine threads (tsan)" "$BUILD/engine-tsan" -DCMAKE_BUILD_TYPE=Debug \
+    -DMOCAP_SANITIZE=thread -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+    -- -L threads
+
+  echo "=== fuzz: HiPNUC decoder for ${FUZZ_SECONDS}s"
+  fuzz_dir="$BUILD/fuzz"
+  if CC=clang-14 CXX=clang++-14 cmake -S "$NATIVE" -B "$fuzz_dir" -DMOCAP_FUZZ=ON \
+       -DMOCAP_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >"$fuzz_dir.log" 2>&1 &&
+     cmake --build "$fuzz_dir" --target fuzz_hipnuc_decoder -j"$JOBS" >>"$fuzz_dir.log" 2>&1; then
+    corpus="$fuzz_dir/corpus"; mkdir -p "$corpus"
+    if (cd "$fuzz_dir" && ./fuzz/fuzz_hipnuc_decoder -max_total_time="$FUZZ_SECONDS" \
+          -print_final_stats=1 "$corpus" "$NATIVE/fuzz/corpus") >"$fuzz_dir.run.log" 2>&1; then
+      grep -E "stat::number_of_executed_units" "$fuzz_dir.run.log" || true
+      record "fuzz (decoder)" 1 0
+    else
+      tail -40 "$fuzz_dir.run.log"; record "fuzz (decoder)" 0 1
+    fi
+  else
+    tail -40 "$fuzz_dir.log"; record "fuzz (decoder build)" 0 1
+  fi
+fi
+
+if [ -d "$ROOT/training/tests" ]; then
+  echo "=== python: pytest training/"
+  log="$BUILD/pytest.log"
+  (cd "$ROOT" && /usr/bin/python3 -m pytest -q training/tests) 2>&1 | tee "$log"
+  p="$(grep -Eo '[0-9]+ passed' "$log" | tail -1 | grep -Eo '[0-9]+' || echo 0)"
+  f="$(grep -Eo '[0-9]+ (failed|error)' "$log" | awk '{s+=$1} END {print s+0}')"
+  if [ "$p" = "0" ] && [ "$f" = "0" ]; then f=1; fi
+  record "python (training)" "$p" "$f"
+fi
+
+echo
+echo "=== summary"
+for line in "${summary[@]}"; do echo "$line"; done
+echo "$total_passed passed, $total_failed failed"
+[ "$total_failed" -eq 0 ]
