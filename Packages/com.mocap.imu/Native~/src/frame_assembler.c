@@ -98,6 +98,7 @@ void assembler_push(frame_assembler *a, const imu_sample *s)
     if (!a->started) {
         a->started = 1;
         a->next_t = grid_time(a->period, grid_index_at_or_after(a->period, s->t));
+        a->resume_t = a->next_t;
     }
 }
 
@@ -179,11 +180,13 @@ int assembler_next(frame_assembler *a, double now_s, raw_frame *out)
                 continue;
             any_valid = 1;
             views[s] = track_find(k, t);
-            if (!track_stale_at(a, &views[s], t))
+            const int stale = track_stale_at(a, &views[s], t);
+            if (!stale)
                 any_live = 1;
-            /* A stale sensor is still waited for (up to hold_latency): after a silence the
-             * sensors resume one by one, and a frame should not go out with only the first. */
-            if (!views[s].after)
+            /* After a (re)start sensors resume one by one, and a frame should not go out with
+             * only the first, so stale sensors are waited for (up to hold_latency) then; later a
+             * stale sensor is gone and waiting for it would only add latency to every frame. */
+            if (!views[s].after && (!stale || t < a->resume_t + a->stale_after))
                 all_arrived = 0;
             if (views[s].after && views[s].after->t < first_new)
                 first_new = views[s].after->t;
@@ -201,6 +204,7 @@ int assembler_next(frame_assembler *a, double now_s, raw_frame *out)
             if (index <= grid_index_of(a->period, t))
                 index = grid_index_of(a->period, t) + 1; /* always make progress */
             a->next_t = grid_time(a->period, index);
+            a->resume_t = a->next_t;
             continue;
         }
         if (all_arrived || now_s >= t + a->hold_latency) {

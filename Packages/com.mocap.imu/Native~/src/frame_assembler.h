@@ -42,6 +42,8 @@ typedef struct frame_assembler {
     double stale_after;
     int started;
     double next_t;      /* time of the next frame to emit */
+    double resume_t;    /* when the grid last (re)started: after a silence sensors resume one by
+                         * one, so until resume_t + stale_after even stale sensors are waited for */
     uint64_t sequence;
     uint64_t out_of_order; /* samples older than the sensor's newest, dropped */
     sensor_track tracks[MOCAP_SENSOR_COUNT];
@@ -52,7 +54,8 @@ void assembler_init(frame_assembler *a, double rate_hz, double hold_latency_s, d
 void assembler_push(frame_assembler *a, const imu_sample *s);
 /* Emit the next frame if it is due given the data so far and the current session time now_s:
  * due when every valid sensor has a sample at or after next_t, or when now_s >= next_t +
- * hold_latency and some sensor is not stale. When every sensor is stale the frame grid jumps to
+ * hold_latency and some sensor is not stale. A sensor stale for longer than stale_after since the
+ * grid (re)started is taken as gone and not waited for, so a dead sensor adds no latency. When every sensor is stale the frame grid jumps to
  * the first new sample instead of emitting frames of held data. Returns 1 and fills out when a
  * frame was emitted, 0 otherwise; call repeatedly until it returns 0. */
 int assembler_next(frame_assembler *a, double now_s, raw_frame *out);
