@@ -2,6 +2,7 @@
 # Runs every test suite of the project and ends with one line "N passed, N failed".
 #   engine:       ctest on a normal build, an ASan+UBSan build and (threading suites) a TSan build
 #   fuzz:         the HiPNUC decoder under libFuzzer for a bounded time
+#   dotnet:       the C# core's NUnit tests against the real native library
 #   python:       pytest over training/ (when it has tests)
 # Environment: MOCAP_FUZZ_SECONDS (default 60), MOCAP_SKIP_SANITIZERS=1 for a quick local run.
 set -uo pipefail
@@ -77,6 +78,25 @@ if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
     fi
   else
     tail -40 "$fuzz_dir.log"; record "fuzz (decoder build)" 0 1
+  fi
+fi
+
+if [ -d "$ROOT/dotnet/Mocap.Imu.Core.Tests" ]; then
+  echo "=== dotnet: C# core (NUnit) against the real engine"
+  log="$BUILD/dotnet.log"
+  if ! command -v dotnet >/dev/null 2>&1; then
+    echo "dotnet SDK not found"; record "dotnet (C# core)" 0 1
+  else
+    (cd "$ROOT" && MOCAP_MOCAPCTL="$BUILD/engine/mocapctl" \
+      dotnet test dotnet/Mocap.Imu.Core.Tests -p:MocapNativeDir="$BUILD/engine" --nologo) 2>&1 | tee "$log"
+    line="$(grep -E '(Passed|Failed)! +- +Failed: +[0-9]+, +Passed: +[0-9]+' "$log" | tail -1)"
+    if [ -z "$line" ]; then
+      record "dotnet (C# core)" 0 1
+    else
+      f="$(sed -E 's/.*Failed: +([0-9]+),.*/\1/' <<<"$line")"
+      p="$(sed -E 's/.*Passed: +([0-9]+),.*/\1/' <<<"$line")"
+      record "dotnet (C# core)" "$p" "$f"
+    fi
   fi
 fi
 

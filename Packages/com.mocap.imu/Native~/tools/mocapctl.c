@@ -7,6 +7,8 @@
  *   mocapctl live    --port DEV [--baud 460800] [--record CAPTURE] [--seconds N]
  *   mocapctl record  --port DEV --out CAPTURE [--baud 460800] [--seconds N]
  *   mocapctl bench   decode [--seconds S]
+ *   mocapctl infer   --model M.onnx --input IN --output OUT [--stream | --frames T] (tools/infer.c)
+ *   mocapctl model-info M.onnx
  *   mocapctl version
  */
 #include <math.h>
@@ -24,6 +26,8 @@
 
 #define DRAIN_CAPACITY 256
 
+int mocapctl_onnx(const char *cmd, int argc, char **argv); /* tools/infer.c */
+
 static volatile sig_atomic_t interrupted = 0;
 static void on_interrupt(int sig) { (void)sig; interrupted = 1; }
 
@@ -39,6 +43,9 @@ static int usage(void)
             "  mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S]\n"
             "  mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S]\n"
             "  mocapctl bench decode [--seconds S]\n"
+            "  mocapctl infer --model M.onnx --input IN --output OUT [--frames T | --stream] [--batch B]\n"
+            "                 [--threads N] [--opt 0-3] [--provider cpu|cuda] [--repeat R]\n"
+            "  mocapctl model-info M.onnx\n"
             "  mocapctl version\n");
     return 2;
 }
@@ -547,6 +554,20 @@ static void print_status_line(mocap_session *session, const mocap_frame *f)
     fflush(stdout);
 }
 
+/* Refreshes the status line ten times a second until Ctrl-C or limit_s seconds. */
+static void show_status_until(mocap_session *session, double limit_s)
+{
+    int64_t start = mocap_monotonic_ns();
+    mocap_frame frame;
+    int have = 0;
+    while (!interrupted && (double)(mocap_monotonic_ns() - start) * 1e-9 < limit_s) {
+        if (mocap_session_poll_latest(session, &frame) == MOCAP_OK) have = 1;
+        print_status_line(session, have ? &frame : NULL);
+        mocap_sleep_ms(100);
+    }
+    printf("\n");
+}
+
 static int guided_step(mocap_session *session, int step, const char *instruction, float seconds)
 {
     printf("\n%s\n", instruction);
@@ -597,15 +618,7 @@ static int cmd_live(int argc, char **argv)
         if (rc == 0 || interrupted) break;
     }
     if (rc == 0) printf("\nCalibrated. Streaming; Ctrl-C to stop.\n");
-    int64_t start = mocap_monotonic_ns();
-    mocap_frame frame;
-    int have = 0;
-    while (!interrupted && (double)(mocap_monotonic_ns() - start) * 1e-9 < limit) {
-        if (mocap_session_poll_latest(session, &frame) == MOCAP_OK) have = 1;
-        print_status_line(session, have ? &frame : NULL);
-        mocap_sleep_ms(100);
-    }
-    printf("\n");
+    show_status_until(session, limit);
     mocap_session_close(session);
     return rc;
 }
@@ -619,18 +632,13 @@ static int cmd_record(int argc, char **argv)
     if (open_live(argc, argv, out, &session) != 0) return 1;
     double limit = seconds ? atof(seconds) : 1e30;
     printf("recording to %s; Ctrl-C to stop\n", out);
-    int64_t start = mocap_monotonic_ns();
-    mocap_frame frame;
-    int have = 0;
-    while (!interrupted && (double)(mocap_monotonic_ns() - start) * 1e-9 < limit) {
-        if (mocap_session_poll_latest(session, &frame) == MOCAP_OK) have = 1;
-        print_status_line(session, have ? &frame : NULL);
-        mocap_sleep_ms(100);
-    }
+    show_status_until(session, limit);
     mocap_session_stats stats;
     mocap_session_get_stats(session, &stats);
     mocap_session_close(session);
-    printf("\nrecorded %llu bytes%s%s\n", (unsigned long long)stats.capture_bytes_written,
+    printf("recorded %llu bytes from the port (%llu bytes on disk)%s%s\n",
+           (unsigned long long)stats.bytes_received,
+           (unsigned long long)stats.capture_bytes_written,
            stats.capture_error ? "; recording failed: " : "",
            stats.capture_error ? stats.last_error : "");
     return stats.capture_error ? 1 : 0;
@@ -647,6 +655,7 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "replay") == 0) return cmd_replay(argc - 2, argv + 2);
     if (strcmp(cmd, "live") == 0) return cmd_live(argc - 2, argv + 2);
     if (strcmp(cmd, "record") == 0) return cmd_record(argc - 2, argv + 2);
+    if (strcmp(cmd, "infer") == 0 || strcmp(cmd, "model-info") == 0) return mocapctl_onnx(cmd, argc - 2, argv + 2);
     if (strcmp(cmd, "bench") == 0) {
         if (argc < 3 || strcmp(argv[2], "decode") != 0) return usage();
         const char *seconds = arg_value(argc - 3, argv + 3, "--seconds");

@@ -1,0 +1,133 @@
+// The command-line tool as a user runs it: synth -> replay with the truth, and record from a
+// pseudo-terminal. Output is parsed, so a change that breaks what users read breaks here too.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <regex>
+#include <string>
+#include <thread>
+
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include "e2e_support.h"
+#include "test_support.h"
+
+extern "C" {
+#include "capture_file.h"
+}
+
+namespace {
+
+struct CommandResult {
+    int exit_code = -1;
+    std::string output;
+};
+
+CommandResult run_command(const std::string &args)
+{
+    CommandResult r;
+    std::string cmd = std::string(MOCAP_MOCAPCTL) + " " + args + " 2>&1";
+    FILE *p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    int status = pclose(p);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+}  // namespace
+
+TEST(Mocapctl, SynthThenReplayCalibratesAndReportsSmallError)
+{
+    std::string dir = test_temp_dir();
+    CommandResult synth = run_command("synth --out " + dir + "/c.cap --truth " + dir +
+                                      "/t.csv --motion walk --world enu --seed 3");
+    ASSERT_EQ(synth.exit_code, 0) << synth.output;
+    CommandResult replay = run_command("replay " + dir + "/c.cap --truth " + dir + "/t.csv --save-calibration " +
+                                       dir + "/c.calibration --csv " + dir + "/frames.csv");
+    ASSERT_EQ(replay.exit_code, 0) << replay.output;
+    EXPECT_NE(replay.output.find("heading step: accepted"), std::string::npos) << replay.output;
+    EXPECT_NE(replay.output.find("T-pose step: accepted"), std::string::npos) << replay.output;
+    std::smatch m;
+    std::regex worst("worst sensor mean ([0-9.]+) deg");
+    ASSERT_TRUE(std::regex_search(replay.output, m, worst)) << replay.output;
+    EXPECT_LT(std::stod(m[1]), 1.0);  // realistic noise gives ~0.3 deg (see test_pipeline)
+
+    // The saved calibration replays the capture without running the prelude steps again.
+    CommandResult again = run_command("replay " + dir + "/c.cap --truth " + dir + "/t.csv --calibration " +
+                                      dir + "/c.calibration");
+    ASSERT_EQ(again.exit_code, 0) << again.output;
+    ASSERT_TRUE(std::regex_search(again.output, m, worst)) << again.output;
+    EXPECT_LT(std::stod(m[1]), 1.0);
+    EXPECT_EQ(again.output.find("heading step"), std::string::npos);
+
+    // One CSV row per output frame, 51 columns (3 + 6 sensors x 8).
+    auto csv = read_file_bytes(dir + "/frames.csv");
+    std::string text(csv.begin(), csv.end());
+    size_t rows = std::count(text.begin(), text.end(), '\n');
+    EXPECT_GT(rows, 600u);
+    std::string header = text.substr(0, text.find('\n'));
+    EXPECT_EQ(std::count(header.begin(), header.end(), ','), 50);
+}
+
+TEST(Mocapctl, ReplayOfAMissingFileFailsWithItsName)
+{
+    CommandResult r = run_command("replay /nonexistent/x.cap");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.output.find("/nonexistent/x.cap"), std::string::npos) << r.output;
+}
+
+TEST(Mocapctl, RecordFromAPseudoTerminalKeepsEveryByte)
+{
+    int master = -1, slave = -1;
+    char name[256];
+    struct termios raw;
+    cfmakeraw(&raw);
+    ASSERT_EQ(openpty(&master, &slave, name, &raw, nullptr), 0);
+    close(slave);
+    std::string out = test_temp_path("recorded.cap");
+
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.motion_s = 1.0;
+    auto packets = generate(cfg, "walk");
+    std::vector<uint8_t> sent;
+    std::thread writer([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let mocapctl open the port
+        for (size_t i = 0; i < 100 && i < packets.size(); ++i) {
+            const auto &b = packets[i].bytes;
+            ASSERT_EQ(write(master, b.data(), b.size()), (ssize_t)b.size());
+            sent.insert(sent.end(), b.begin(), b.end());
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+    });
+    CommandResult r = run_command(std::string("record --port ") + name + " --out " + out + " --seconds 2");
+    writer.join();
+    close(master);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("recorded " + std::to_string(sent.size()) + " bytes"), std::string::npos)
+        << r.output;
+
+    capture_reader *reader = nullptr;
+    ASSERT_EQ(capture_reader_open(out.c_str(), &reader), MOCAP_OK) << mocap_last_error();
+    std::vector<uint8_t> recorded;
+    int64_t ns;
+    const uint8_t *data;
+    size_t len;
+    while (capture_reader_next(reader, &ns, &data, &len) == MOCAP_OK) recorded.insert(recorded.end(), data, data + len);
+    capture_reader_close(reader);
+    EXPECT_TRUE(recorded == sent);
+}
+
+TEST(Mocapctl, LiveOnAWrongPortNamesIt)
+{
+    CommandResult r = run_command("live --port /dev/ttyNOPE0 --seconds 1");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.output.find("/dev/ttyNOPE0"), std::string::npos) << r.output;
+}
