@@ -18,7 +18,7 @@ extern "C" {
 
 /* Calibration steps can be queued (e.g. heading then T-pose of a replay's prelude, scheduled
  * before the replay starts, since a fast replay would outrun a caller reacting to results). */
-#define PIPELINE_CALIBRATION_QUEUE 4
+#define PIPELINE_CALIBRATION_QUEUE 8
 
 typedef struct calibration_request {
     int32_t step;

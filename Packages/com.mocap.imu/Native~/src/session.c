@@ -40,6 +40,7 @@ struct mocap_session {
     mocap_thread *reader;
     mocap_thread *processor;
     int started;
+    int replay;                 /* data time, not the wall clock, drives frames */
     int replay_fast;            /* replay as fast as possible: back-pressure instead of dropping */
 
     mocap_atomic_int stop;
@@ -54,6 +55,7 @@ struct mocap_session {
     mocap_mutex *lock;
     calibration_request pending[PENDING_CALIBRATION_REQUESTS]; /* not yet handed to the pipeline */
     uint32_t pending_count;
+    uint32_t pipeline_queued;   /* steps queued inside the pipeline, as of the last snapshot */
     int calibration_set_pending;
     mocap_calibration calibration_to_set;
     mocap_calibration calibration_snapshot;
@@ -206,6 +208,7 @@ static void publish_snapshots(mocap_session *s)
         p->calibration = s->calibration_to_set;
         s->calibration_set_pending = 0;
     }
+    s->pipeline_queued = p->queued;
     s->calibration_snapshot = p->calibration;
     s->report_snapshot = p->report;
     memcpy(s->step_report_snapshot, p->step_reports, sizeof s->step_report_snapshot);
@@ -274,7 +277,9 @@ static void processor_main(void *arg)
             }
         }
         int64_t now_ns = mocap_monotonic_ns();
-        if (!s->replay_fast) pipeline_advance(s->pipe, now_ns); /* emit frames late sensors held up */
+        /* Live: let wall time release frames that late sensors held up. A replay (paced or not)
+         * runs on its recorded timeline, where only data moves time on. */
+        if (!s->replay) pipeline_advance(s->pipe, now_ns);
         if (s->capture) {
             mocap_status st = capture_writer_poll(s->capture, now_ns);
             if (st != MOCAP_OK) record_capture_error(s, st);
@@ -348,6 +353,7 @@ mocap_status mocap_session_open(const mocap_session_config *config, mocap_sessio
         }
         st = transport_open_replay(config->path, config->replay_realtime, config->replay_speed,
                                    &s->source);
+        s->replay = 1;
         s->replay_fast = !config->replay_realtime;
         break;
     default:
@@ -368,7 +374,7 @@ mocap_status mocap_session_open(const mocap_session_config *config, mocap_sessio
         }
     }
     pipeline_init(s->pipe, config, deliver_frame, s);
-    if (!s->replay_fast) s->pipe->clock_ns = live_clock;
+    if (!s->replay) s->pipe->clock_ns = live_clock;
     mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_CONNECTED);
     publish_snapshots(s);
     *out = s;
@@ -466,7 +472,8 @@ mocap_status mocap_calibration_schedule(mocap_session *s, int32_t step, double s
     if (!isfinite(start_s))
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration start time is not finite");
     mocap_mutex_lock(s->lock);
-    if (s->pending_count >= PENDING_CALIBRATION_REQUESTS) {
+    /* The limit counts every step still waiting, here or already inside the pipeline. */
+    if (s->pending_count + s->pipeline_queued >= PENDING_CALIBRATION_REQUESTS) {
         mocap_mutex_unlock(s->lock);
         return mocap_fail(MOCAP_ERR_STATE, "%d calibration steps are already waiting",
                           PENDING_CALIBRATION_REQUESTS);

@@ -36,8 +36,9 @@ mocap_status transport_open_serial(const char *path, uint32_t baud, transport **
 /* path (hidraw path) if non-empty, else the first device with vendor/product id. */
 mocap_status transport_open_hid(const char *path, uint16_t vendor_id, uint16_t product_id,
                                 transport **out);
-/* Records come back with their recorded receive time (shifted so the first is at the current
- * monotonic time when realtime, else unchanged). realtime paces delivery by speed. */
+/* Records come back with their recorded receive time, so a replay's frames carry the recorded
+ * timeline whatever the pace. realtime paces delivery (the first record at once, the others
+ * after their recorded spacing divided by speed); otherwise as fast as the reader asks. */
 mocap_status transport_open_replay(const char *path, int realtime, double speed, transport **out);
 
 static inline mocap_status transport_read(transport *t, uint8_t *buf, size_t cap, int timeout_ms,

@@ -23,7 +23,8 @@ typedef struct replay_transport {
     const uint8_t *pending;
     size_t pending_len;
     size_t pending_off;
-    int64_t pending_ns;     /* already shifted to the live clock when realtime */
+    int64_t pending_ns;     /* recorded receive time: the session's timeline in a replay */
+    int64_t pending_due_ns; /* realtime: when the record is due on the monotonic clock */
     int ended;
 } replay_transport;
 
@@ -61,15 +62,16 @@ static mocap_status replay_read(transport *t, uint8_t *buf, size_t cap, int time
         r->pending = data;
         r->pending_len = len;
         r->pending_off = 0;
-        r->pending_ns = r->realtime ? due_time(r, ns) : ns;
+        r->pending_ns = ns;
+        r->pending_due_ns = r->realtime ? due_time(r, ns) : 0;
     }
 
     if (r->realtime && r->pending_off == 0) {
         int64_t now = mocap_monotonic_ns();
         int64_t deadline = now + (int64_t)(timeout_ms > 0 ? timeout_ms : 0) * 1000000LL;
-        while (now < r->pending_ns) {
+        while (now < r->pending_due_ns) {
             if (now >= deadline) return MOCAP_ERR_TIMEOUT; /* the record stays pending */
-            int64_t until = r->pending_ns < deadline ? r->pending_ns : deadline;
+            int64_t until = r->pending_due_ns < deadline ? r->pending_due_ns : deadline;
             int64_t wait_ms = (until - now + 999999) / 1000000;
             mocap_sleep_ms((int)(wait_ms > 0 ? wait_ms : 1));
             now = mocap_monotonic_ns();

@@ -558,3 +558,63 @@ TEST(Session, StructLayoutTableMatchesTheHeader)
     EXPECT_TRUE(saw_frame);
     EXPECT_EQ(mocap_api_version(), MOCAP_API_VERSION);
 }
+
+// Up to 8 calibration steps may wait behind the one collecting; one more is refused clearly.
+TEST(Session, CalibrationQueueHoldsEightWaitingSteps)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.motion_s = 1.0;
+    std::string capture = test_temp_path("queue.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    mocap_session_config config = replay_config(capture);
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK);
+    for (int i = 0; i < 9; ++i)
+        ASSERT_EQ(mocap_calibration_schedule(session.s, MOCAP_CALIBRATION_HEADING, 100.0 + i, 1.0f), MOCAP_OK) << i;
+    EXPECT_EQ(mocap_calibration_schedule(session.s, MOCAP_CALIBRATION_TPOSE, 200.0, 1.0f), MOCAP_ERR_STATE);
+    EXPECT_NE(std::string(mocap_last_error()).find("8 calibration steps"), std::string::npos) << mocap_last_error();
+}
+
+// A paced replay delivers the recorded timeline (frame times, count and poses) of a fast one;
+// only the wall-clock pace differs.
+TEST(Session, RealtimeReplayKeepsTheRecordedTimeline)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 25;
+    cfg.heading_s = 0.5;
+    cfg.strap_s = 0.2;
+    cfg.tpose_s = 0.5;
+    cfg.motion_s = 1.0;
+    std::string capture = test_temp_path("paced.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    std::vector<mocap_frame> runs[2];
+    double wall[2];
+    for (int paced = 0; paced < 2; ++paced) {
+        mocap_session_config config = replay_config(capture);
+        config.replay_realtime = paced;
+        config.replay_speed = 4.0f;
+        SessionCloser session;
+        ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK);
+        auto t0 = Clock::now();
+        ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+        std::vector<mocap_frame> buf(64);
+        for (;;) {
+            uint32_t n = 0;
+            mocap_status st = mocap_session_drain(session.s, buf.data(), (uint32_t)buf.size(), &n);
+            runs[paced].insert(runs[paced].end(), buf.begin(), buf.begin() + n);
+            if (st == MOCAP_ERR_END_OF_STREAM || seconds_since(t0) > 20) break;
+            if (n == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        }
+        wall[paced] = seconds_since(t0);
+    }
+    ASSERT_EQ(runs[0].size(), runs[1].size());
+    ASSERT_GT(runs[0].size(), 100u);
+    for (size_t i = 0; i < runs[0].size(); ++i) {
+        ASSERT_EQ(runs[0][i].time_s, runs[1][i].time_s) << i;
+        ASSERT_EQ(0, std::memcmp(runs[0][i].sensors, runs[1][i].sensors, sizeof runs[0][i].sensors)) << i;
+    }
+    // 2.2 s of capture at 4x takes at least ~0.55 s of wall time when paced.
+    EXPECT_GE(wall[1], 0.45);
+}
