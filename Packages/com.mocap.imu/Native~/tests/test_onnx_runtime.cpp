@@ -1,0 +1,438 @@
+// The ONNX Runtime module (src/onnx_runtime.c) against the REAL ONNX Runtime library
+// (scripts/fetch_onnxruntime.sh). Contract violations use tiny models made by
+// tests/make_onnx_fixtures.py (python3 + onnx); the shipped model is
+// Runtime/Models/mocap_pose_fp32.onnx. Tests skip only when ONNX Runtime cannot be loaded.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "onnx_runtime.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kTestsDir = fs::path(__FILE__).parent_path();
+const fs::path kShippedModel =
+    kTestsDir / ".." / ".." / "Runtime" / "Models" / "mocap_pose_fp32.onnx";
+
+#define REQUIRE_ORT()                                                                         \
+    do {                                                                                      \
+        if (!ort_library_available(nullptr))                                                  \
+            GTEST_SKIP() << "ONNX Runtime not available: " << mocap_last_error();             \
+    } while (0)
+
+// A python3 that can import onnx (Debian's python3-onnx).
+std::string python_with_onnx()
+{
+    std::vector<std::string> candidates;
+    if (const char *env = std::getenv("MOCAP_PYTHON")) candidates.push_back(env);
+    candidates.push_back("/usr/bin/python3");
+    candidates.push_back("python3");
+    for (const auto &p : candidates) {
+        std::string cmd = "\"" + p + "\" -c \"import onnx\" >/dev/null 2>&1";
+        if (std::system(cmd.c_str()) == 0) return p;
+    }
+    return "";
+}
+
+// Writes the fixture models into this test's temporary directory; returns it.
+std::string make_fixtures()
+{
+    std::string dir = test_temp_dir();
+    std::string py = python_with_onnx();
+    EXPECT_FALSE(py.empty()) << "python3 with the onnx package is needed for the fixtures "
+                                "(scripts/setup.sh installs python3-onnx; or set MOCAP_PYTHON)";
+    std::string cmd = "\"" + py + "\" \"" + (kTestsDir / "make_onnx_fixtures.py").string() +
+                      "\" \"" + dir + "\" >/dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return dir;
+}
+
+struct Opened {
+    ort_model *model = nullptr;
+    mocap_status status = MOCAP_OK;
+    std::string message;
+    ~Opened() { ort_model_close(model); }
+};
+
+void open_model(const std::string &path, Opened &o, const ort_options *opts = nullptr)
+{
+    o.status = ort_model_open(path.c_str(), opts, &o.model);
+    o.message = o.status == MOCAP_OK ? "" : mocap_last_error();
+}
+
+std::vector<float> random_floats(size_t n, unsigned seed, float scale)
+{
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-scale, scale);
+    std::vector<float> v(n);
+    for (auto &x : v) x = u(rng);
+    return v;
+}
+
+}  // namespace
+
+TEST(OnnxRuntime, LoadsTheRealLibrary)
+{
+    REQUIRE_ORT();
+    std::string version = ort_library_version();
+    EXPECT_EQ(version.rfind("1.", 0), 0u) << version;
+    EXPECT_NE(std::string(ort_library_path()), "");
+}
+
+TEST(OnnxRuntime, MissingModelIsNotFound)
+{
+    REQUIRE_ORT();
+    Opened o;
+    std::string path = test_temp_path("no_such_model.onnx");
+    open_model(path, o);
+    EXPECT_EQ(o.status, MOCAP_ERR_NOT_FOUND);
+    EXPECT_EQ(o.model, nullptr);
+    EXPECT_NE(o.message.find("no_such_model.onnx"), std::string::npos) << o.message;
+}
+
+TEST(OnnxRuntime, NonOnnxFileIsAFormatError)
+{
+    REQUIRE_ORT();
+    std::string path = test_temp_path("notes.onnx");
+    write_file_bytes(path, std::vector<uint8_t>{'h', 'e', 'l', 'l', 'o', '\n', 0xff, 0x00, 0x13});
+    Opened o;
+    open_model(path, o);
+    EXPECT_EQ(o.status, MOCAP_ERR_FORMAT);
+    EXPECT_NE(o.message.find("not a model ONNX Runtime can load"), std::string::npos) << o.message;
+    EXPECT_NE(o.message.find("notes.onnx"), std::string::npos) << o.message;
+}
+
+TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    struct Case {
+        const char *file;
+        const char *expect;
+    } cases[] = {
+        {"wrong_input_name.onnx", "input 'imu_orientation' is missing"},
+        {"wrong_rank.onnx", "'imu_orientation' has rank 3, the contract needs rank 5"},
+        {"missing_metadata.onnx", "'mocap.contract_version' is missing"},
+        {"missing_joint_names.onnx", "'mocap.joint_names' is missing"},
+        {"wrong_version.onnx", "mocap.contract_version is '2'"},
+        {"state_mismatch.onnx", "mocap.state_layers"},
+        {"fixed_batch.onnx", "dimension 0 (B) is fixed to 1"},
+        {"wrong_joint_name.onnx", "'left_forearm'"},
+        {"wrong_output_shape.onnx", "output 'joint_rotations' dimension 2 (24) is 12"},
+    };
+    for (const auto &c : cases) {
+        Opened o;
+        open_model(dir + "/" + c.file, o);
+        EXPECT_EQ(o.status, MOCAP_ERR_FORMAT) << c.file;
+        EXPECT_EQ(o.model, nullptr) << c.file;
+        EXPECT_NE(o.message.find(c.expect), std::string::npos) << c.file << ": " << o.message;
+        EXPECT_NE(o.message.find(c.file), std::string::npos) << o.message;  // names the model
+    }
+    // The process is fine after all that: the valid model opens, and so does one whose fixed
+    // output sizes are left symbolic in the file (the probe run checks them).
+    Opened ok, symbolic;
+    open_model(dir + "/valid.onnx", ok);
+    EXPECT_EQ(ok.status, MOCAP_OK) << ok.message;
+    open_model(dir + "/symbolic_dims.onnx", symbolic);
+    EXPECT_EQ(symbolic.status, MOCAP_OK) << symbolic.message;
+}
+
+TEST(OnnxRuntime, ReadsMetadata)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    Opened o;
+    open_model(dir + "/valid.onnx", o);
+    ASSERT_EQ(o.status, MOCAP_OK) << o.message;
+    const ort_model_info *info = ort_model_get_info(o.model);
+    ASSERT_NE(info, nullptr);
+    EXPECT_EQ(info->contract_version, 1);
+    EXPECT_DOUBLE_EQ(info->frame_rate, 60.0);
+    EXPECT_EQ(info->state_layers, 2);
+    EXPECT_EQ(info->state_size, 4);
+    EXPECT_STREQ(info->joint_names[0], "pelvis");
+    EXPECT_STREQ(info->joint_names[23], "right_hand");
+    EXPECT_EQ(info->joint_parents[0], -1);
+    EXPECT_EQ(info->joint_parents[18], 16);
+    EXPECT_NEAR(info->rest_offsets[0][1], 0.93f, 1e-6);
+    EXPECT_STREQ(info->precision, "fp32");
+    EXPECT_STREQ(info->model_name, "fixture");
+}
+
+TEST(OnnxRuntime, CudaWithoutCudaBuildIsRefusedClearly)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    ort_options opts;
+    ort_options_defaults(&opts);
+    opts.provider = ORT_PROVIDER_CUDA;
+    Opened o;
+    open_model(dir + "/valid.onnx", o, &opts);
+    // The fetched library is a CPU build; a CUDA build would open the model instead.
+    if (o.status == MOCAP_OK) GTEST_SKIP() << "this ONNX Runtime has CUDA";
+    EXPECT_EQ(o.status, MOCAP_ERR_UNSUPPORTED);
+    EXPECT_NE(o.message.find("CUDA"), std::string::npos) << o.message;
+    EXPECT_NE(o.message.find("CPUExecutionProvider"), std::string::npos) << o.message;
+}
+
+// The fixture's outputs are known in closed form (see make_onnx_fixtures.py): check the binding,
+// batch layout and state carrying, and that streaming T=1 equals one call for the whole clip.
+TEST(OnnxRuntime, StreamingEqualsWholeClipAndCarriesState)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    ort_options opts;
+    ort_options_defaults(&opts);
+    opts.intra_op_threads = 1;
+    Opened o;
+    open_model(dir + "/valid.onnx", o, &opts);
+    ASSERT_EQ(o.status, MOCAP_OK) << o.message;
+    const int B = 2, N = 12;
+    std::vector<float> ori = random_floats((size_t)B * N * 54, 1, 1.0f);
+    std::vector<float> acc = random_floats((size_t)B * N * 18, 2, 0.2f);
+
+    ort_stream *whole = nullptr, *step = nullptr;
+    ASSERT_EQ(ort_stream_create(o.model, B, N, &whole), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(ort_stream_create(o.model, B, 1, &step), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(ort_stream_state_count(whole), (size_t)2 * B * 4);
+    std::memcpy(ort_stream_orientation(whole), ori.data(), ori.size() * sizeof(float));
+    std::memcpy(ort_stream_acceleration(whole), acc.data(), acc.size() * sizeof(float));
+    ASSERT_EQ(ort_stream_run(whole), MOCAP_OK) << mocap_last_error();
+
+    // Expected, from the closed form.
+    for (int b = 0; b < B; ++b) {
+        double cum = 0;
+        for (int t = 0; t < N; ++t) {
+            for (int k = 0; k < 18; ++k) cum += acc[((size_t)b * N + t) * 18 + k];
+            const float *v = ort_stream_root_velocity(whole) + ((size_t)b * N + t) * 3;
+            for (int k = 0; k < 3; ++k) ASSERT_NEAR(v[k], cum, 1e-4) << b << " " << t;
+            const float *rot = ort_stream_joint_rotations(whole) + ((size_t)b * N + t) * 216;
+            for (int j = 0; j < 24; ++j)
+                for (int k = 0; k < 9; ++k)
+                    ASSERT_EQ(rot[j * 9 + k], ori[((size_t)b * N + t) * 54 + (j % 6) * 9 + k]);
+            const float *fc = ort_stream_foot_contact(whole) + ((size_t)b * N + t) * 2;
+            EXPECT_NEAR(fc[0], 1.0 / (1.0 + std::exp(-cum)), 1e-5);
+        }
+        // The state after the call is the clip's total for this character.
+        for (int l = 0; l < 2; ++l)
+            for (int h = 0; h < 4; ++h)
+                EXPECT_NEAR(ort_stream_state_h(whole)[(l * B + b) * 4 + h], cum, 1e-4);
+    }
+    EXPECT_NEAR(ort_stream_state_c(whole)[0], 1.0f, 1e-6);  // 0.5 * 0 + 1
+
+    // Frame by frame, state carried by the stream.
+    const float *out_ptr = ort_stream_root_velocity(step);
+    for (int t = 0; t < N; ++t) {
+        for (int b = 0; b < B; ++b) {
+            std::memcpy(ort_stream_orientation(step) + (size_t)b * 54,
+                        ori.data() + ((size_t)b * N + t) * 54, 54 * sizeof(float));
+            std::memcpy(ort_stream_acceleration(step) + (size_t)b * 18,
+                        acc.data() + ((size_t)b * N + t) * 18, 18 * sizeof(float));
+        }
+        ASSERT_EQ(ort_stream_run(step), MOCAP_OK) << mocap_last_error();
+        EXPECT_EQ(ort_stream_root_velocity(step), out_ptr);  // bound buffers, no reallocation
+        for (int b = 0; b < B; ++b)
+            for (int k = 0; k < 3; ++k)
+                ASSERT_NEAR(ort_stream_root_velocity(step)[b * 3 + k],
+                            ort_stream_root_velocity(whole)[((size_t)b * N + t) * 3 + k], 1e-4)
+                    << "frame " << t << " character " << b;
+    }
+    for (size_t i = 0; i < ort_stream_state_count(step); ++i) {
+        EXPECT_NEAR(ort_stream_state_h(step)[i], ort_stream_state_h(whole)[i], 1e-4);
+        EXPECT_NEAR(ort_stream_state_c(step)[i], 2.0f - std::ldexp(1.0f, -(N - 1)), 1e-5);
+    }
+    // A reset starts over: the first frame's result again.
+    ort_stream_reset_state(step);
+    ASSERT_EQ(ort_stream_run(step), MOCAP_OK);
+    double last_frame_sum = 0;
+    for (int k = 0; k < 18; ++k) last_frame_sum += acc[((size_t)0 * N + N - 1) * 18 + k];
+    EXPECT_NEAR(ort_stream_root_velocity(step)[0], last_frame_sum, 1e-4);
+    ort_stream_destroy(whole);
+    ort_stream_destroy(step);
+}
+
+TEST(OnnxRuntime, RejectsBadStreamShapes)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    Opened o;
+    open_model(dir + "/valid.onnx", o);
+    ASSERT_EQ(o.status, MOCAP_OK) << o.message;
+    ort_stream *s = nullptr;
+    EXPECT_EQ(ort_stream_create(o.model, 0, 1, &s), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(ort_stream_create(o.model, 1, 0, &s), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(s, nullptr);
+}
+
+// mocapctl infer + model-info on the fixture, through tensor bundle files.
+namespace {
+void put_u32(std::vector<uint8_t> &b, uint32_t v)
+{
+    for (int i = 0; i < 4; ++i) b.push_back((uint8_t)(v >> (8 * i)));
+}
+void put_tensor(std::vector<uint8_t> &b, const char *name, std::vector<uint32_t> dims,
+                const std::vector<float> &data)
+{
+    char n[32] = {0};
+    std::snprintf(n, sizeof n, "%s", name);
+    b.insert(b.end(), n, n + 32);
+    put_u32(b, (uint32_t)dims.size());
+    for (uint32_t d : dims) put_u32(b, d);
+    const uint8_t *p = reinterpret_cast<const uint8_t *>(data.data());
+    b.insert(b.end(), p, p + data.size() * 4);  // little-endian host (x86, ARM)
+}
+// Returns the named tensor's data from a bundle file (empty if absent).
+std::vector<float> get_tensor(const std::vector<uint8_t> &b, const std::string &want)
+{
+    size_t pos = 8;
+    auto u32 = [&](size_t at) {
+        return (uint32_t)b[at] | (uint32_t)b[at + 1] << 8 | (uint32_t)b[at + 2] << 16 |
+               (uint32_t)b[at + 3] << 24;
+    };
+    if (b.size() < 16 || std::memcmp(b.data(), "MOCAPTNS", 8) != 0) return {};
+    uint32_t count = u32(12);
+    pos = 16;
+    for (uint32_t i = 0; i < count; ++i) {
+        std::string name(reinterpret_cast<const char *>(&b[pos]));
+        uint32_t rank = u32(pos + 32);
+        size_t n = 1;
+        for (uint32_t d = 0; d < rank; ++d) n *= u32(pos + 36 + 4 * d);
+        pos += 36 + 4 * rank;
+        if (name == want) {
+            std::vector<float> out(n);
+            std::memcpy(out.data(), &b[pos], n * 4);
+            return out;
+        }
+        pos += n * 4;
+    }
+    return {};
+}
+std::string run_capture(const std::string &cmd)
+{
+    std::string out;
+    FILE *p = popen(cmd.c_str(), "r");
+    if (!p) return out;
+    char buf[512];
+    while (fgets(buf, sizeof buf, p)) out += buf;
+    int rc = pclose(p);
+    out += "\nrc=" + std::to_string(rc);
+    return out;
+}
+}  // namespace
+
+TEST(OnnxRuntime, MocapctlInferStreamMatchesWholeClip)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    const int B = 1, N = 7;
+    std::vector<float> ori = random_floats((size_t)B * N * 54, 3, 1.0f);
+    std::vector<float> acc = random_floats((size_t)B * N * 18, 4, 0.3f);
+    std::vector<uint8_t> bundle = {'M', 'O', 'C', 'A', 'P', 'T', 'N', 'S'};
+    put_u32(bundle, 1);
+    put_u32(bundle, 2);
+    put_tensor(bundle, "imu_orientation", {B, N, 6, 3, 3}, ori);
+    put_tensor(bundle, "imu_acceleration", {B, N, 6, 3}, acc);
+    std::string in = dir + "/in.tensors";
+    write_file_bytes(in, bundle);
+    std::string base = std::string(MOCAP_MOCAPCTL) + " infer --model " + dir + "/valid.onnx" +
+                       " --input " + in + " --threads 1 --output ";
+    std::string r1 = run_capture(base + dir + "/whole.tensors 2>&1");
+    ASSERT_NE(r1.find("rc=0"), std::string::npos) << r1;
+    std::string r2 = run_capture(base + dir + "/stream.tensors --stream 2>&1");
+    ASSERT_NE(r2.find("rc=0"), std::string::npos) << r2;
+    EXPECT_NE(r2.find("timing: calls 7 frames_per_call 1"), std::string::npos) << r2;
+    std::string r3 = run_capture(base + dir + "/chunks.tensors --frames 3 2>&1");
+    ASSERT_NE(r3.find("rc=0"), std::string::npos) << r3;
+    auto whole = get_tensor(read_file_bytes(dir + "/whole.tensors"), "root_velocity");
+    auto stream = get_tensor(read_file_bytes(dir + "/stream.tensors"), "root_velocity");
+    auto chunks = get_tensor(read_file_bytes(dir + "/chunks.tensors"), "root_velocity");
+    ASSERT_EQ(whole.size(), (size_t)N * 3);
+    ASSERT_EQ(stream.size(), whole.size());
+    ASSERT_EQ(chunks.size(), whole.size());
+    double cum = 0;
+    for (int t = 0; t < N; ++t) {
+        for (int k = 0; k < 18; ++k) cum += acc[(size_t)t * 18 + k];
+        EXPECT_NEAR(whole[t * 3], cum, 1e-4);
+        EXPECT_NEAR(stream[t * 3], cum, 1e-4);
+        EXPECT_NEAR(chunks[t * 3], cum, 1e-4);
+    }
+    auto state = get_tensor(read_file_bytes(dir + "/chunks.tensors"), "state_out_h");
+    ASSERT_EQ(state.size(), 8u);
+    EXPECT_NEAR(state[0], cum, 1e-4);
+
+    std::string info = run_capture(std::string(MOCAP_MOCAPCTL) + " model-info " + dir +
+                                   "/valid.onnx 2>&1");
+    EXPECT_NE(info.find("right_hand"), std::string::npos) << info;
+    EXPECT_NE(info.find("layers 2, size 4"), std::string::npos) << info;
+    std::string bad = run_capture(std::string(MOCAP_MOCAPCTL) + " model-info " + dir +
+                                  "/wrong_version.onnx 2>&1");
+    EXPECT_NE(bad.find("contract_version is '2'"), std::string::npos) << bad;
+    EXPECT_EQ(bad.find("rc=0"), std::string::npos) << bad;
+}
+
+// The model the package ships (untrained or trained): valid, and streaming == whole clip.
+TEST(OnnxRuntime, ShippedModelIsValidAndStreams)
+{
+    REQUIRE_ORT();
+    ASSERT_TRUE(fs::exists(kShippedModel)) << kShippedModel << " is missing";
+    ort_options opts;
+    ort_options_defaults(&opts);
+    opts.intra_op_threads = 1;
+    Opened o;
+    open_model(kShippedModel.string(), o, &opts);
+    ASSERT_EQ(o.status, MOCAP_OK) << o.message;
+    const ort_model_info *info = ort_model_get_info(o.model);
+    EXPECT_EQ(info->contract_version, 1);
+    EXPECT_GT(info->frame_rate, 0);
+    EXPECT_STREQ(info->joint_names[15], "head");
+    const int N = 8;
+    // A still T-pose: identity orientations, zero accelerations.
+    ort_stream *whole = nullptr, *step = nullptr;
+    ASSERT_EQ(ort_stream_create(o.model, 1, N, &whole), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(ort_stream_create(o.model, 1, 1, &step), MOCAP_OK) << mocap_last_error();
+    std::vector<float> acc = random_floats((size_t)N * 18, 5, 2.0f);
+    for (int t = 0; t < N; ++t)
+        for (int s = 0; s < 6; ++s)
+            for (int k = 0; k < 9; ++k)
+                ort_stream_orientation(whole)[(t * 6 + s) * 9 + k] = (k % 4 == 0) ? 1.0f : 0.0f;
+    std::memcpy(ort_stream_acceleration(whole), acc.data(), acc.size() * sizeof(float));
+    ASSERT_EQ(ort_stream_run(whole), MOCAP_OK) << mocap_last_error();
+    for (int t = 0; t < N; ++t) {
+        std::memcpy(ort_stream_orientation(step), ort_stream_orientation(whole) + t * 54, 54 * 4);
+        std::memcpy(ort_stream_acceleration(step), acc.data() + t * 18, 18 * 4);
+        ASSERT_EQ(ort_stream_run(step), MOCAP_OK) << mocap_last_error();
+        for (int k = 0; k < 216; ++k) {
+            float a = ort_stream_joint_rotations(step)[k];
+            float b = ort_stream_joint_rotations(whole)[t * 216 + k];
+            ASSERT_TRUE(std::isfinite(a));
+            ASSERT_NEAR(a, b, 2e-3) << "frame " << t << " value " << k;
+        }
+        for (int k = 0; k < 3; ++k)
+            ASSERT_NEAR(ort_stream_root_velocity(step)[k], ort_stream_root_velocity(whole)[t * 3 + k],
+                        2e-3);
+    }
+    // Rotations are rotations.
+    const float *r = ort_stream_joint_rotations(whole);
+    for (int j = 0; j < 24 * N; ++j) {
+        const float *m = r + j * 9;
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) {
+                double dot = 0;
+                for (int k = 0; k < 3; ++k) dot += m[k * 3 + a] * m[k * 3 + b];
+                ASSERT_NEAR(dot, a == b ? 1.0 : 0.0, 1e-3) << "matrix " << j;
+            }
+    }
+    ort_stream_destroy(whole);
+    ort_stream_destroy(step);
+}

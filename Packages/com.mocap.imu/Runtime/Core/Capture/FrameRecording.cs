@@ -1,0 +1,122 @@
+// Pose recordings: the frame CSV that `mocapctl replay --csv` writes, one row per engine frame:
+//   sequence,time_s,flags, then per segment (engine order) qw,qx,qy,qz,ax,ay,az,flags
+// Loaded back into MocapFrames, a recording plays in the editor and in PlayMode tests exactly
+// like frames drained from a live session (only the fields the CSV holds are filled).
+
+using System;
+using System.Collections.Generic;
+using System.Globalization;
+using System.IO;
+
+namespace Mocap.Imu.Capture
+{
+    /// <summary>Frames recorded as CSV (the format of <c>mocapctl replay --csv</c>).</summary>
+    public static class FrameRecording
+    {
+        const int ColumnsPerSensor = 8;
+        const int Columns = 3 + MocapSession.SensorCount * ColumnsPerSensor;
+
+        /// <summary>
+        /// Read every frame of a recording. Fills sequence, time, flags, fresh mask (from the
+        /// sensors' Held flag), bone orientation, bone acceleration and sensor flags.
+        /// </summary>
+        /// <exception cref="MocapException">NotFound, or Format naming the file and line.</exception>
+        public static MocapFrame[] Load(string path)
+        {
+            string[] lines;
+            try
+            {
+                lines = File.ReadAllLines(path);
+            }
+            catch (Exception e) when (e is FileNotFoundException || e is DirectoryNotFoundException)
+            {
+                throw new MocapException(MocapStatus.NotFound, $"frame recording {path}: no such file", e);
+            }
+            var frames = new List<MocapFrame>(lines.Length);
+            for (int i = 0; i < lines.Length; i++)
+            {
+                string line = lines[i].Trim();
+                if (line.Length == 0 || line[0] == '#' || line.StartsWith("sequence", StringComparison.Ordinal))
+                    continue;
+                frames.Add(ParseRow(line, path, i + 1));
+            }
+            return frames.ToArray();
+        }
+
+        /// <summary>Write frames in the same format (mocapctl's precision).</summary>
+        public static void Save(string path, ReadOnlySpan<MocapFrame> frames)
+        {
+            using var writer = new StreamWriter(path, false);
+            writer.NewLine = "\n";
+            writer.Write("sequence,time_s,flags");
+            for (int s = 0; s < MocapSession.SensorCount; s++)
+            {
+                string n = SegmentNames[s];
+                writer.Write($",{n}_qw,{n}_qx,{n}_qy,{n}_qz,{n}_ax,{n}_ay,{n}_az,{n}_flags");
+            }
+            writer.WriteLine();
+            var c = CultureInfo.InvariantCulture;
+            foreach (ref readonly MocapFrame f in frames)
+            {
+                writer.Write(string.Format(c, "{0},{1:F6},{2}", f.Sequence, f.TimeSeconds, (uint)f.Flags));
+                for (int s = 0; s < MocapSession.SensorCount; s++)
+                {
+                    var sf = f.GetSensor((MocapSegment)s);
+                    var q = sf.BoneOrientation;
+                    var a = sf.BoneAcceleration;
+                    writer.Write(string.Format(c, ",{0:F6},{1:F6},{2:F6},{3:F6},{4:F4},{5:F4},{6:F4},{7}",
+                        q.W, q.X, q.Y, q.Z, a.X, a.Y, a.Z, (uint)sf.Flags));
+                }
+                writer.WriteLine();
+            }
+        }
+
+        // The engine's segment names (mocap_segment_name), kept here so recordings need no engine.
+        static readonly string[] SegmentNames =
+            { "pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head" };
+
+        static MocapFrame ParseRow(string line, string path, int lineNumber)
+        {
+            var cells = line.Split(',');
+            if (cells.Length != Columns)
+                throw new MocapException(MocapStatus.Format,
+                    $"frame recording {path}:{lineNumber}: {cells.Length} columns, expected {Columns}");
+            var frame = new MocapFrame
+            {
+                Sequence = ulong.Parse(cells[0], CultureInfo.InvariantCulture),
+                TimeSeconds = Double(cells[1], path, lineNumber),
+                Flags = (MocapFrameFlags)uint.Parse(cells[2], CultureInfo.InvariantCulture),
+            };
+            for (int s = 0; s < MocapSession.SensorCount; s++)
+            {
+                int c = 3 + s * ColumnsPerSensor;
+                var sensor = new MocapSensorFrame
+                {
+                    BoneOrientation = new MocapQuaternion(Number(cells[c], path, lineNumber),
+                        Number(cells[c + 1], path, lineNumber), Number(cells[c + 2], path, lineNumber),
+                        Number(cells[c + 3], path, lineNumber)),
+                    BoneAcceleration = new MocapVector3(Number(cells[c + 4], path, lineNumber),
+                        Number(cells[c + 5], path, lineNumber), Number(cells[c + 6], path, lineNumber)),
+                    Flags = (MocapSensorFlags)uint.Parse(cells[c + 7], CultureInfo.InvariantCulture),
+                };
+                // The CSV has no fresh mask; a valid sensor that is not held was fresh.
+                if ((sensor.Flags & (MocapSensorFlags.Valid | MocapSensorFlags.Held)) == MocapSensorFlags.Valid)
+                    frame.FreshMask |= 1u << s;
+                frame.SetSensor((MocapSegment)s, sensor);
+            }
+            return frame;
+        }
+
+        static float Number(string text, string path, int lineNumber) =>
+            (float)Double(text, path, lineNumber);
+
+        static double Double(string text, string path, int lineNumber)
+        {
+            if (!double.TryParse(text, NumberStyles.Float, CultureInfo.InvariantCulture, out double value) ||
+                double.IsNaN(value) || double.IsInfinity(value))
+                throw new MocapException(MocapStatus.Format,
+                    $"frame recording {path}:{lineNumber}: '{text}' is not a finite number");
+            return value;
+        }
+    }
+}
