@@ -11,6 +11,7 @@ PACKAGES=(
   clang-14 libclang-rt-14-dev        # libFuzzer + ThreadSanitizer runtime
   python3 python3-numpy python3-pytest
   python3-torch python3-onnx python3-tqdm python3-matplotlib   # training/
+  libopenblas0-pthread               # torch on the CPU is ~10x slower with the reference BLAS
   liblo-tools                        # oscdump: a real OSC receiver for interop tests
 )
 

@@ -1,0 +1,55 @@
+"""python3 -m training <command>: prepare | train | export | evaluate | synth-capture.
+
+Each subcommand imports its module lazily, so --help works while a module is missing."""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+COMMANDS = {
+    "prepare": ("dataset", "extract the CMU archives and convert every clip into the cache"),
+    "train": ("train", "train the pose model (checkpoints in training/data/checkpoints)"),
+    "export": ("export", "export ONNX fp32 + fp16 per docs/model-contract.md"),
+    "evaluate": ("evaluate", "metrics of PyTorch / ONNX models on held-out clips"),
+    "synth-capture": ("synth_capture", "BVH clip -> raw HiPNUC capture via mocapctl synth"),
+}
+
+
+def _module(name: str):
+    try:
+        return importlib.import_module(f"training.{name}")
+    except ImportError as e:
+        return e
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python3 -m training", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", metavar="command")
+    want = sys.argv[1] if len(sys.argv) > 1 else None
+    for cmd, (mod, text) in COMMANDS.items():
+        sp = sub.add_parser(cmd, help=text, description=text)
+        sp.set_defaults(_module=mod)
+        if cmd == want:   # only the requested module is imported (for its options)
+            m = _module(mod)
+            if not isinstance(m, Exception) and hasattr(m, "add_arguments"):
+                m.add_arguments(sp)
+    return p
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help()
+        return 0
+    m = _module(args._module)
+    if isinstance(m, Exception):
+        print(f"training {args.command}: module training.{args._module} is not available ({m})",
+              file=sys.stderr)
+        return 2
+    return int(m.main(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

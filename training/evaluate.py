@@ -1,0 +1,535 @@
+"""evaluate: the pose model on held-out motion, against the truth and a kinematic baseline.
+
+    python3 -m training evaluate [--split val | --bvh DIR] [--models M.onnx ...]
+        [--checkpoint CKPT] [--out training/results] [--max-clips N] [--max-seconds S]
+        [--seed 0] [--no-torch] [--no-latency]
+
+For every clip: IMU inputs are synthesised WITH realistic sensor errors (eval_augmentation() below, fixed
+seed, no body-scale or heading augmentation), then predicted by
+  * PyTorch fp32 (the training checkpoint),
+  * ONNX fp32 / fp16 (the shipped models, through the REAL ONNX Runtime: training/ort.py),
+  * a kinematic baseline: each sensor's orientation applied straight to its bone (pelvis global,
+    wrists, shins, head), every other joint at rest, root velocity zero.
+Metrics (field-notes section 1; definitions also in training/README.md):
+  angle_all   mean joint angle error, deg: angle of pred^T * true of the LOCAL rotations (joint 0:
+              global pelvis), over all 24 joints and all frames
+  angle_dip   the same over the 15 joints DIP/TransPose evaluate (no pelvis, ankles, feet,
+              wrists, hands)
+  sip         SIP error, deg: GLOBAL rotation angle error of hips and shoulders (1, 2, 16, 17)
+  pos         mean joint position error, cm, both skeletons root-aligned (translation only), the
+              clip's own offsets, 24 joints
+  drift_Ws    root drift, m: windows of W = 2, 5, 10 s starting every second: | predicted root
+              displacement (integrated root_velocity) - true displacement | at the window end
+  jitter      mean |third time derivative| of the root-aligned joint positions, 10^2 m/s^3
+              (TransPose's unit; the truth's own jitter is listed for reference)
+  latency     ONNX Runtime per frame for one character, streaming T = 1 on one intra-op thread
+              (mocapctl infer --stream --threads 1): p50 / p99 microseconds per call
+Writes OUT/evaluation.md (table + targets) and PNGs: per-joint angle error, error over time,
+drift vs window length.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import skeleton as sk
+
+REPO = Path(__file__).resolve().parent.parent
+MODELS_DIR = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
+DEFAULT_MODELS = [MODELS_DIR / "mocap_pose_fp32.onnx", MODELS_DIR / "mocap_pose_fp16.onnx"]
+RESULTS_DIR = REPO / "training" / "results"
+CHECKPOINT_CANDIDATES = ["training/data/checkpoints/last.pt", "training/data/checkpoints/latest.pt",
+                         "training/data/checkpoints/best.pt", "training/data/checkpoint.pt"]
+
+DIP_EXCLUDED = [0, 7, 8, 10, 11, 20, 21, 22, 23]
+DIP_JOINTS = [j for j in range(24) if j not in DIP_EXCLUDED]
+SIP_JOINTS = [1, 2, 16, 17]
+DRIFT_WINDOWS = (2.0, 5.0, 10.0)
+
+# Evaluation inputs: synthesis.Augmentation with its realistic sensor errors (per-sensor
+# mounting/calibration error, sensor-world yaw error, orientation noise, accelerometer noise and
+# bias, short drop-outs holding the last sample) and nothing else: no body scaling, no random
+# heading (the clip's own skeleton and heading are kept).
+def eval_augmentation():
+    from .synthesis import Augmentation
+    return Augmentation(scale=(1.0, 1.0), heading=False)
+
+
+TARGETS = {"angle_all": 10.0, "pos": 6.0, "baseline_reduction": 0.40, "params": 4_000_000,
+           "latency_ms": 1.0}
+
+
+# ------------------------------------------------------------------------------ inputs
+@dataclass
+class Clip:
+    name: str
+    fps: float
+    offsets: np.ndarray            # (24,3)
+    imu_orientation: np.ndarray    # (T,6,3,3)
+    imu_acceleration: np.ndarray   # (T,6,3)
+    local_rot: np.ndarray          # (T,24,3,3) truth
+    root_pos: np.ndarray           # (T,3) truth
+
+
+def synthesize_clip(motion: sk.Motion, rng) -> Clip:
+    """Noisy IMU inputs (synthesis.synthesize with eval_augmentation()) + the truth."""
+    from .synthesis import synthesize
+    sample = synthesize(motion, rng=rng, augment=eval_augmentation())
+    return Clip(motion.name, float(sample.fps), np.asarray(sample.offsets, np.float64),
+                np.asarray(sample.imu_orientation, np.float32),
+                np.asarray(sample.imu_acceleration, np.float32),
+                np.asarray(sample.local_rot, np.float64), np.asarray(sample.root_pos, np.float64))
+
+
+# ------------------------------------------------------------------------------ predictors
+@dataclass
+class Prediction:
+    local_rot: np.ndarray      # (T,24,3,3)
+    root_velocity: np.ndarray  # (T,3)
+
+
+def predict_baseline(clip: Clip) -> Prediction:
+    T = clip.imu_orientation.shape[0]
+    ori = clip.imu_orientation.astype(np.float64)
+    local = np.broadcast_to(np.eye(3), (T, 24, 3, 3)).copy()
+    pelvis = ori[:, 0]
+    local[:, 0] = pelvis
+    # Every ancestor of the sensor bones (other than the pelvis) is at rest, so the parent's
+    # global rotation is the pelvis's.
+    for s, j in enumerate(sk.SENSOR_JOINTS):
+        if j != 0:
+            local[:, j] = np.swapaxes(pelvis, -1, -2) @ ori[:, s]
+    return Prediction(local, np.zeros((T, 3)))
+
+
+def _batches(clips, max_batch=16, max_values=60_000_000):
+    """Groups of clip indices of similar length (padding is harmless: the models are causal)."""
+    order = sorted(range(len(clips)), key=lambda i: clips[i].imu_orientation.shape[0])
+    group = []
+    for i in order:
+        T = clips[i].imu_orientation.shape[0]
+        if group and (len(group) >= max_batch or (len(group) + 1) * T * 300 > max_values):
+            yield group
+            group = []
+        group.append(i)
+    if group:
+        yield group
+
+
+def _padded(clips, group):
+    T = max(clips[i].imu_orientation.shape[0] for i in group)
+    ori = np.tile(np.eye(3, dtype=np.float32), (len(group), T, 6, 1, 1))
+    acc = np.zeros((len(group), T, 6, 3), np.float32)
+    for b, i in enumerate(group):
+        n = clips[i].imu_orientation.shape[0]
+        ori[b, :n] = clips[i].imu_orientation
+        acc[b, :n] = clips[i].imu_acceleration
+    return ori, acc
+
+
+def predict_onnx(model_path, clips) -> list:
+    from .ort import run_onnx
+    out = [None] * len(clips)
+    for group in _batches(clips):
+        ori, acc = _padded(clips, group)
+        r = run_onnx(model_path, ori, acc)
+        for b, i in enumerate(group):
+            n = clips[i].imu_orientation.shape[0]
+            out[i] = Prediction(r["joint_rotations"][b, :n].astype(np.float64),
+                                r["root_velocity"][b, :n].astype(np.float64))
+    return out
+
+
+def find_checkpoint():
+    for c in CHECKPOINT_CANDIDATES:
+        if (REPO / c).is_file():
+            return REPO / c
+    return None
+
+
+def load_torch_model(path):
+    """A PoseNet from a checkpoint: a whole module, or a dict holding the state dict under
+    'model' / 'state_dict' / 'model_state' (else the dict itself) and the config under 'config'."""
+    import torch
+    from .model import ModelConfig, PoseNet
+    from .train import load_checkpoint_file
+    ckpt = load_checkpoint_file(path)
+    if isinstance(ckpt, torch.nn.Module):
+        return ckpt.eval()
+    cfg = ckpt.get("config") or ckpt.get("model_config") or {}
+    if isinstance(cfg, dict):
+        known = ModelConfig.__dataclass_fields__
+        cfg = ModelConfig(**{k: v for k, v in cfg.items() if k in known})
+    net = PoseNet(cfg)
+    state = None
+    for key in ("model", "state_dict", "model_state", "net"):
+        if isinstance(ckpt.get(key), dict):
+            state = ckpt[key]
+            break
+    net.load_state_dict(state if state is not None else ckpt)
+    return net.eval()
+
+
+def predict_torch(net, clips) -> list:
+    from .train import setup_threads
+    import torch
+    setup_threads()  # OpenBLAS threads its own GEMMs; torch threads on top oversubscribe
+    out = [None] * len(clips)
+    with torch.no_grad():
+        for group in _batches(clips):
+            ori, acc = _padded(clips, group)
+            rot, vel, _, _ = net(torch.from_numpy(ori), torch.from_numpy(acc))
+            for b, i in enumerate(group):
+                n = clips[i].imu_orientation.shape[0]
+                out[i] = Prediction(rot[b, :n].double().numpy(), vel[b, :n].double().numpy())
+    return out
+
+
+# ------------------------------------------------------------------------------ metrics
+def rotation_angle_deg(a, b):
+    """Angle of a^T b, degrees, for (...,3,3) stacks."""
+    tr = np.einsum("...ji,...ji->...", a, b)
+    return np.degrees(np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0)))
+
+
+def root_aligned_positions(local_rot, offsets):
+    g, p = sk.forward_kinematics(local_rot, np.zeros(local_rot.shape[:-3] + (3,)), offsets)
+    return g, p
+
+
+def drift_errors(pred_vel, true_root, fps, window_s, step_s=1.0):
+    """Root drift per window: |integrated predicted displacement - true displacement| (m)."""
+    T = len(true_root)
+    w = int(round(window_s * fps))
+    if T <= w:
+        return np.zeros(0)
+    pred_pos = np.concatenate([np.zeros((1, 3)), np.cumsum(pred_vel[1:], axis=0) / fps])
+    starts = np.arange(0, T - w, max(1, int(round(step_s * fps))))
+    d_pred = pred_pos[starts + w] - pred_pos[starts]
+    d_true = true_root[starts + w] - true_root[starts]
+    return np.linalg.norm(d_pred - d_true, axis=-1)
+
+
+def jitter(positions, fps):
+    """Mean |d^3 p / dt^3| over joints and frames, m/s^3."""
+    if len(positions) < 4:
+        return float("nan")
+    d3 = np.diff(positions, n=3, axis=0) * fps ** 3
+    return float(np.linalg.norm(d3, axis=-1).mean())
+
+
+@dataclass
+class Accumulator:
+    """Sums over all frames of all clips of one method."""
+    frames: int = 0
+    angle_joint: np.ndarray = field(default_factory=lambda: np.zeros(24))
+    sip_sum: float = 0.0
+    pos_sum: float = 0.0
+    drift: dict = field(default_factory=lambda: {w: [] for w in DRIFT_WINDOWS})
+    drift_curve: dict = field(default_factory=dict)   # window s -> list of errors
+    jitter_sum: float = 0.0
+    jitter_frames: int = 0
+    over_time: list = field(default_factory=list)     # per clip: (T,) mean angle error
+
+    def add(self, clip: Clip, pred: Prediction):
+        true_l = clip.local_rot
+        ang = rotation_angle_deg(pred.local_rot, true_l)          # (T,24)
+        g_p, p_p = root_aligned_positions(pred.local_rot, clip.offsets)
+        g_t, p_t = root_aligned_positions(true_l, clip.offsets)
+        T = ang.shape[0]
+        self.frames += T
+        self.angle_joint += ang.sum(axis=0)
+        self.sip_sum += rotation_angle_deg(g_p[:, SIP_JOINTS], g_t[:, SIP_JOINTS]).mean(axis=1).sum()
+        self.pos_sum += np.linalg.norm(p_p - p_t, axis=-1).mean(axis=1).sum() * 100.0
+        for w in DRIFT_WINDOWS:
+            self.drift[w].extend(drift_errors(pred.root_velocity, clip.root_pos, clip.fps, w))
+        for w in np.arange(1.0, 10.5, 1.0):
+            self.drift_curve.setdefault(float(w), []).extend(
+                drift_errors(pred.root_velocity, clip.root_pos, clip.fps, w))
+        if T >= 4:
+            self.jitter_sum += jitter(p_p, clip.fps) * (T - 3)
+            self.jitter_frames += T - 3
+        self.over_time.append(ang.mean(axis=1))
+
+    def summary(self) -> dict:
+        n = max(self.frames, 1)
+        per_joint = self.angle_joint / n
+        out = {"angle_all": float(per_joint.mean()), "angle_dip": float(per_joint[DIP_JOINTS].mean()),
+               "sip": self.sip_sum / n, "pos": self.pos_sum / n, "per_joint": per_joint,
+               "jitter": (self.jitter_sum / self.jitter_frames / 100.0) if self.jitter_frames else float("nan")}
+        for w in DRIFT_WINDOWS:
+            v = self.drift[w]
+            out[f"drift_{w:g}s"] = float(np.mean(v)) if len(v) else float("nan")
+            out[f"drift_{w:g}s_n"] = len(v)
+        out["drift_curve"] = {w: (float(np.mean(v)) if len(v) else float("nan"))
+                              for w, v in sorted(self.drift_curve.items())}
+        return out
+
+
+def truth_jitter(clips) -> float:
+    s, n = 0.0, 0
+    for c in clips:
+        T = c.local_rot.shape[0]
+        if T >= 4:
+            _, p = root_aligned_positions(c.local_rot, c.offsets)
+            s += jitter(p, c.fps) * (T - 3)
+            n += T - 3
+    return s / n / 100.0 if n else float("nan")
+
+
+# ------------------------------------------------------------------------------ latency / params
+def measure_latency(model_path, frames=1800, seed=0) -> dict:
+    """ONNX Runtime, one character, T = 1 per call, one intra-op thread (mocapctl infer)."""
+    from .ort import run_onnx
+    m = __import__("training.procedural", fromlist=["make_motion"]).make_motion(
+        "mixed", frames / sk.MODEL_FPS, seed=seed)
+    clip = synthesize_clip(m, np.random.default_rng(seed))
+    r = run_onnx(model_path, clip.imu_orientation[None], clip.imu_acceleration[None], stream=True,
+                 threads=1, timing=True)
+    timing = r["timing"]
+    timing["cpus"] = os.cpu_count()
+    timing["load"] = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    return timing
+
+
+def onnx_parameter_count(model_path) -> int:
+    import onnx
+    m = onnx.load(str(model_path))
+    return int(sum(int(np.prod(t.dims)) for t in m.graph.initializer if len(t.dims) >= 1))
+
+
+# ------------------------------------------------------------------------------ report
+def _fmt(v, digits=2):
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "-"
+    return f"{v:.{digits}f}"
+
+
+def write_report(out_dir, results, meta, latency, params, truth_jit):
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    base = results.get("baseline")
+    lines = ["# Pose model evaluation", "",
+             f"Generated by `python3 -m training evaluate` on {meta['when']}. Data: {meta['source']} "
+             f"({meta['clips']} clips, {meta['seconds']:.0f} s at {sk.MODEL_FPS} Hz). Inputs "
+             f"synthesised with realistic sensor noise ({meta['noise']}), seed {meta['seed']}.", "",
+             "Synthetic inputs from motion capture: not directly comparable to published numbers on "
+             "real sensors (field-notes section 1).", "",
+             "| method | angle, all 24 (deg) | angle, DIP 15 (deg) | SIP (deg) | position (cm) | "
+             "drift 2 s (m) | drift 5 s (m) | drift 10 s (m) | jitter (10^2 m/s^3) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, s in results.items():
+        lines.append(f"| {name} | {_fmt(s['angle_all'])} | {_fmt(s['angle_dip'])} | {_fmt(s['sip'])} | "
+                     f"{_fmt(s['pos'])} | {_fmt(s['drift_2s'], 3)} | {_fmt(s['drift_5s'], 3)} | "
+                     f"{_fmt(s['drift_10s'], 3)} | {_fmt(s['jitter'])} |")
+    lines.append(f"| truth (reference) | 0 | 0 | 0 | 0 | 0 | 0 | 0 | {_fmt(truth_jit)} |")
+    lines += ["", f"Drift windows: {results[next(iter(results))].get('drift_2s_n', 0)} / "
+              f"{results[next(iter(results))].get('drift_5s_n', 0)} / "
+              f"{results[next(iter(results))].get('drift_10s_n', 0)} windows of 2 / 5 / 10 s "
+              "(clips shorter than a window contribute none).", "",
+              "## Targets (issue 3)", "",
+              "| target | required | measured | met |", "|---|---|---|---|"]
+    model_name = next((n for n in results if n.startswith("ONNX fp32")), None) or \
+        next((n for n in results if n != "baseline"), None)
+    if model_name:
+        s = results[model_name]
+        lines.append(f"| mean joint angle error ({model_name}) | <= {TARGETS['angle_all']:g} deg | "
+                     f"{_fmt(s['angle_all'])} deg | {'yes' if s['angle_all'] <= TARGETS['angle_all'] else 'NO'} |")
+        lines.append(f"| mean joint position error | <= {TARGETS['pos']:g} cm | {_fmt(s['pos'])} cm | "
+                     f"{'yes' if s['pos'] <= TARGETS['pos'] else 'NO'} |")
+        if base:
+            red = 1.0 - s["angle_all"] / base["angle_all"] if base["angle_all"] > 0 else float("nan")
+            lines.append(f"| angle error below the kinematic baseline | >= 40 % | {_fmt(100 * red, 1)} % "
+                         f"(baseline {_fmt(base['angle_all'])} deg) | "
+                         f"{'yes' if red >= TARGETS['baseline_reduction'] else 'NO'} |")
+    if params is not None:
+        lines.append(f"| parameters | <= 4 M | {params / 1e6:.2f} M | "
+                     f"{'yes' if params <= TARGETS['params'] else 'NO'} |")
+    if latency:
+        p99_ms = latency["p99_us"] / 1000.0
+        lines.append(f"| ONNX Runtime per frame, 1 character, 1 thread | < 1 ms | p50 "
+                     f"{latency['p50_us'] / 1000:.3f} ms, p99 {p99_ms:.3f} ms ({latency['calls']} calls, "
+                     f"{latency['model']}; {latency.get('cpus', '?')} CPUs, load average {latency.get('load', float('nan')):.1f} "
+                     f"while measured) | {'yes' if p99_ms < TARGETS['latency_ms'] else 'NO'} (p99), "
+                     f"{'yes' if latency['p50_us'] / 1000 < TARGETS['latency_ms'] else 'NO'} (p50) |")
+    lines += ["", "## Definitions", "",
+              "- angle: angle of the relative rotation between predicted and true LOCAL joint "
+              "rotations (joint 0 = global pelvis). \"DIP 15\" leaves out the pelvis, ankles, feet, "
+              "wrists and hands, as DIP/TransPose/PIP evaluate.",
+              "- SIP: global rotation angle error of the hips and shoulders (TransPose).",
+              "- position: joint positions by forward kinematics on the clip's own skeleton, both "
+              "roots at the origin (orientation kept), mean over 24 joints.",
+              "- drift: predicted root velocity integrated at 60 Hz over windows starting every "
+              "second, compared with the true root displacement (m).",
+              "- jitter: mean norm of the third finite difference of the root-aligned joint "
+              "positions, in 10^2 m/s^3 (TransPose's unit; 1 km/s^3 = 10 x 10^2 m/s^3).",
+              "- baseline: the sensors' orientations applied to their own bones, all other joints "
+              "at rest, no translation.",
+              f"- latency: `mocapctl infer --stream --threads 1` on {meta.get('latency_frames', 1800)} "
+              "frames, the engine's ONNX Runtime module, first call (warm-up) excluded.", "",
+              "Plots: `per_joint_error.png`, `error_over_time.png`, `drift.png`."]
+    (out_dir / "evaluation.md").write_text("\n".join(lines) + "\n")
+    return out_dir / "evaluation.md"
+
+
+def write_plots(out_dir, results, accs, clips):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    out_dir = Path(out_dir)
+    names = list(results)
+    # Per-joint angle error
+    fig, ax = plt.subplots(figsize=(12, 4.5))
+    width = 0.8 / max(len(names), 1)
+    x = np.arange(24)
+    for k, n in enumerate(names):
+        ax.bar(x + (k - (len(names) - 1) / 2) * width, results[n]["per_joint"], width, label=n)
+    ax.set_xticks(x)
+    ax.set_xticklabels(sk.JOINT_NAMES, rotation=60, ha="right", fontsize=8)
+    ax.set_ylabel("mean local angle error (deg)")
+    ax.set_title("Per-joint angle error")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out_dir / "per_joint_error.png", dpi=110)
+    plt.close(fig)
+    # Error over time: the longest clip
+    longest = int(np.argmax([c.local_rot.shape[0] for c in clips]))
+    fig, ax = plt.subplots(figsize=(10, 4))
+    for n in names:
+        e = accs[n].over_time[longest]
+        ax.plot(np.arange(len(e)) / clips[longest].fps, e, label=n, lw=1)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("mean angle error over joints (deg)")
+    ax.set_title(f"Error over time, clip {clips[longest].name}")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out_dir / "error_over_time.png", dpi=110)
+    plt.close(fig)
+    # Drift vs window length
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for n in names:
+        curve = results[n]["drift_curve"]
+        ax.plot(list(curve), list(curve.values()), marker="o", label=n)
+    ax.set_xlabel("window (s)")
+    ax.set_ylabel("mean root drift (m)")
+    ax.set_title("Root drift vs window length")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out_dir / "drift.png", dpi=110)
+    plt.close(fig)
+
+
+# ------------------------------------------------------------------------------ driver
+def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, latency=True,
+             latency_frames=1800, source="", progress=True) -> dict:
+    """Evaluate every available method on the motions; writes the report; returns summaries."""
+    rng = np.random.default_rng(seed)
+    clips = [synthesize_clip(m, rng) for m in motions]
+    if not clips:
+        raise ValueError("no motions to evaluate")
+    preds = {"baseline": [predict_baseline(c) for c in clips]}
+    params = None
+    if checkpoint:
+        from .model import count_parameters
+        net = load_torch_model(checkpoint)
+        params = count_parameters(net)
+        preds["PyTorch fp32"] = predict_torch(net, clips)
+    from .ort import onnx_runtime_available
+    lat = None
+    for mp in models:
+        mp = Path(mp)
+        if not mp.is_file():
+            print(f"evaluate: {mp} not found; skipped")
+            continue
+        if not onnx_runtime_available():
+            print("evaluate: ONNX Runtime not available (scripts/fetch_onnxruntime.sh); ONNX skipped")
+            break
+        label = "ONNX fp16" if "fp16" in mp.name else "ONNX fp32" if "fp32" in mp.name else f"ONNX {mp.stem}"
+        preds[label] = predict_onnx(mp, clips)
+        if params is None:
+            params = onnx_parameter_count(mp)
+        if latency and lat is None and "fp16" not in mp.name:
+            lat = measure_latency(mp, latency_frames, seed)
+            lat["model"] = mp.name
+    accs, results = {}, {}
+    order = [n for n in ("PyTorch fp32", "ONNX fp32", "ONNX fp16") if n in preds] + \
+        [n for n in preds if n not in ("PyTorch fp32", "ONNX fp32", "ONNX fp16", "baseline")] + ["baseline"]
+    for name in order:
+        acc = Accumulator()
+        for c, p in zip(clips, preds[name]):
+            acc.add(c, p)
+        accs[name] = acc
+        results[name] = acc.summary()
+    meta = {"when": time.strftime("%Y-%m-%d %H:%M"), "source": source, "clips": len(clips),
+            "seconds": sum(c.local_rot.shape[0] / c.fps for c in clips), "seed": seed,
+            "noise": _describe(eval_augmentation()), "latency_frames": latency_frames}
+    tj = truth_jitter(clips)
+    report = write_report(out_dir, results, meta, lat, params, tj)
+    write_plots(out_dir, results, accs, clips)
+    return {"results": results, "latency": lat, "params": params, "report": report,
+            "truth_jitter": tj}
+
+
+def _describe(aug) -> str:
+    from dataclasses import asdict
+    return ", ".join(f"{k} {v}" for k, v in asdict(aug).items())
+
+
+def _trim(motions, max_clips, max_seconds):
+    if max_clips:
+        motions = motions[:max_clips]
+    if max_seconds:
+        out = []
+        for m in motions:
+            n = int(max_seconds * m.fps)
+            out.append(sk.Motion(m.name, m.subject, m.fps, m.local_rot[:n], m.root_pos[:n], m.offsets))
+        motions = out
+    return motions
+
+
+def add_arguments(p):
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--split", default="val", help="train / val / test of the CMU data (default val)")
+    src.add_argument("--bvh", help="a folder of BVH files instead (any depth; manifest.csv honoured)")
+    p.add_argument("--models", nargs="*", default=[str(m) for m in DEFAULT_MODELS],
+                   help="ONNX models (default: the shipped fp32 and fp16)")
+    p.add_argument("--checkpoint", default=None, help="PyTorch checkpoint (default: the newest "
+                   "of " + ", ".join(CHECKPOINT_CANDIDATES) + ")")
+    p.add_argument("--no-torch", action="store_true", help="skip the PyTorch model")
+    p.add_argument("--out", default=str(RESULTS_DIR))
+    p.add_argument("--max-clips", type=int, default=0)
+    p.add_argument("--max-seconds", type=float, default=0.0, help="cut clips to this length")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--no-latency", action="store_true")
+    p.add_argument("--no-cache", action="store_true", help="do not cache converted BVH clips")
+    return p
+
+
+def main(args=None) -> int:
+    if args is None or isinstance(args, list):
+        args = add_arguments(argparse.ArgumentParser(prog="python3 -m training evaluate")).parse_args(args)
+    from . import dataset
+    source = args.bvh if args.bvh else args.split
+    motions = dataset.load_motions(Path(args.bvh) if args.bvh else args.split,
+                                   cache=not getattr(args, "no_cache", False))
+    motions = _trim(motions, args.max_clips, args.max_seconds)
+    ckpt = None if args.no_torch else (args.checkpoint or find_checkpoint())
+    if not args.no_torch and ckpt is None:
+        print("evaluate: no checkpoint found; PyTorch skipped")
+    r = evaluate(motions, args.models, ckpt, args.out, args.seed, not args.no_latency,
+                 source=f"{'BVH folder ' if args.bvh else 'split '}{source}")
+    for name, s in r["results"].items():
+        print(f"{name:14s} angle {s['angle_all']:6.2f} deg (DIP15 {s['angle_dip']:6.2f})  SIP "
+              f"{s['sip']:6.2f}  pos {s['pos']:6.2f} cm  drift 2/5/10 s {s['drift_2s']:.3f} / "
+              f"{s['drift_5s']:.3f} / {s['drift_10s']:.3f} m  jitter {s['jitter']:.2f} x10^2 m/s^3")
+    if r["latency"]:
+        print(f"latency (ORT, T=1, 1 thread): p50 {r['latency']['p50_us']:.0f} us, p99 "
+              f"{r['latency']['p99_us']:.0f} us")
+    print(f"evaluate: wrote {r['report']} and plots")
+    return 0

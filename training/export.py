@@ -1,0 +1,235 @@
+"""ONNX export of PoseNet per docs/model-contract.md (owner: model).
+
+    python3 -m training export [--checkpoint PATH | --untrained] [--out DIR]
+
+writes DIR/mocap_pose_fp32.onnx and DIR/mocap_pose_fp16.onnx. Both have float32 inputs and
+outputs; the fp16 file stores every floating-point initializer as float16 followed by a Cast to
+float32 (weight compression only: compute stays float32, which ONNX Runtime's CPU LSTM kernel
+requires). Dynamic B and T axes, opset 14, the contract's names and metadata. The files are
+validated with onnx.checker and, where ONNX Runtime is available (training/ort.py, the real C
+library), compared with PyTorch on procedural fixtures: whole clip and streaming T = 1.
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from . import skeleton as sk
+from .model import ExportWrapper, ModelConfig, PoseNet, count_parameters
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_OUT = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
+DEFAULT_CHECKPOINT = REPO / "training" / "data" / "checkpoints" / "best.pt"
+OPSET = 14
+CONTRACT_VERSION = "1"
+INPUT_NAMES = ["imu_orientation", "imu_acceleration", "state_in_h", "state_in_c"]
+OUTPUT_NAMES = ["joint_rotations", "root_velocity", "foot_contact", "state_out_h", "state_out_c"]
+FP32_NAME = "mocap_pose_fp32.onnx"
+FP16_NAME = "mocap_pose_fp16.onnx"
+
+
+def _fmt(x: float) -> str:
+    return f"{float(x):.6g}"
+
+
+def contract_metadata(net: PoseNet, precision: str, model_name: str) -> dict:
+    return {
+        "mocap.contract_version": CONTRACT_VERSION,
+        "mocap.frame_rate": str(sk.MODEL_FPS),
+        "mocap.sensor_order": ",".join(sk.SENSOR_NAMES),
+        "mocap.joint_names": ",".join(sk.JOINT_NAMES),
+        "mocap.joint_parents": ",".join(str(p) for p in sk.PARENTS),
+        "mocap.rest_offsets": ",".join(_fmt(v) for v in np.asarray(sk.DEFAULT_OFFSETS).reshape(-1)),
+        "mocap.state_layers": str(net.state_layers),
+        "mocap.state_size": str(net.state_size),
+        "mocap.precision": precision,
+        "mocap.model_name": model_name,
+    }
+
+
+def _set_metadata(model, meta: dict) -> None:
+    del model.metadata_props[:]
+    for k, v in meta.items():
+        p = model.metadata_props.add()
+        p.key, p.value = k, v
+
+
+def export_fp32(net: PoseNet, path, model_name: str) -> None:
+    import onnx
+    net = net.cpu().eval()
+    wrapper = ExportWrapper(net).eval()
+    b, t = 1, 4
+    ori = torch.eye(3).expand(b, t, 6, 3, 3).contiguous()
+    acc = torch.zeros(b, t, 6, 3)
+    h, c = net.zero_state(b)
+    dyn = {"imu_orientation": {0: "B", 1: "T"}, "imu_acceleration": {0: "B", 1: "T"},
+           "state_in_h": {1: "B"}, "state_in_c": {1: "B"},
+           "joint_rotations": {0: "B", 1: "T"}, "root_velocity": {0: "B", 1: "T"},
+           "foot_contact": {0: "B", 1: "T"}, "state_out_h": {1: "B"}, "state_out_c": {1: "B"}}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    import warnings
+    with torch.no_grad(), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        torch.onnx.export(wrapper, (ori, acc, h, c), str(path), input_names=INPUT_NAMES,
+                          output_names=OUTPUT_NAMES, dynamic_axes=dyn, opset_version=OPSET,
+                          do_constant_folding=True)
+    model = onnx.load(str(path))
+    _fix_state_shapes(model, net)
+    _set_metadata(model, contract_metadata(net, "fp32", model_name))
+    model.doc_string = "com.mocap.imu pose model, contract version " + CONTRACT_VERSION
+    onnx.checker.check_model(model)
+    onnx.save(model, str(path))
+
+
+def _fix_state_shapes(model, net: PoseNet) -> None:
+    """Write the contract's shapes on every input and output (symbolic B and T, static rest;
+    the exporter leaves some static dims symbolic, e.g. the 24 of a Concat)."""
+    L, H = net.state_layers, net.state_size
+    shapes = {"imu_orientation": ["B", "T", 6, 3, 3], "imu_acceleration": ["B", "T", 6, 3],
+              "state_in_h": [L, "B", H], "state_in_c": [L, "B", H],
+              "joint_rotations": ["B", "T", 24, 3, 3], "root_velocity": ["B", "T", 3],
+              "foot_contact": ["B", "T", 2], "state_out_h": [L, "B", H], "state_out_c": [L, "B", H]}
+    for vi in list(model.graph.input) + list(model.graph.output):
+        want = shapes[vi.name]
+        shp = vi.type.tensor_type.shape
+        del shp.dim[:]
+        for d in want:
+            dd = shp.dim.add()
+            if isinstance(d, str):
+                dd.dim_param = d
+            else:
+                dd.dim_value = d
+
+
+def convert_fp16(src, dst) -> dict:
+    """fp32 ONNX -> fp16 weights: float initializers stored as float16 + Cast to float32."""
+    import onnx
+    from onnx import helper, numpy_helper, TensorProto
+    model = onnx.load(str(src))
+    g = model.graph
+    casts, new_inits, converted = [], [], 0
+    for init in g.initializer:
+        if init.data_type != TensorProto.FLOAT:
+            new_inits.append(init)
+            continue
+        arr = numpy_helper.to_array(init)
+        half = numpy_helper.from_array(arr.astype(np.float16), init.name + "_fp16")
+        new_inits.append(half)
+        casts.append(helper.make_node("Cast", [half.name], [init.name], to=TensorProto.FLOAT,
+                                      name=init.name + "_cast"))
+        converted += arr.size
+    del g.initializer[:]
+    g.initializer.extend(new_inits)
+    nodes = list(g.node)
+    del g.node[:]
+    g.node.extend(casts + nodes)
+    # drop stale value_info of the casted names (they keep float type anyway)
+    meta = {p.key: p.value for p in model.metadata_props}
+    meta["mocap.precision"] = "fp16"
+    _set_metadata(model, meta)
+    onnx.checker.check_model(model)
+    onnx.save(model, str(dst))
+    return {"fp16_values": int(converted)}
+
+
+def load_checkpoint(path) -> tuple:
+    from .train import load_checkpoint_file
+    ck = load_checkpoint_file(path)
+    cfg = ModelConfig(**ck["config"])
+    net = PoseNet(cfg)
+    net.load_state_dict(ck["model"])
+    return net.eval(), ck
+
+
+def untrained_model(seed: int = 0, config: ModelConfig | None = None) -> PoseNet:
+    torch.manual_seed(seed)
+    return PoseNet(config or ModelConfig()).eval()
+
+
+# ------------------------------------------------------------------------------ numeric check
+def fixture_inputs(seconds: float = 3.0, seed: int = 0, kinds=("walk", "mixed")) -> tuple:
+    """Procedural motions -> synthesised (B,T,6,3,3), (B,T,6,3) float32 (no augmentation)."""
+    from . import procedural
+    from .synthesis import synthesize
+    oris, accs = [], []
+    for i, k in enumerate(kinds):
+        s = synthesize(procedural.make_motion(k, seconds=seconds, seed=seed + i))
+        oris.append(s.imu_orientation)
+        accs.append(s.imu_acceleration)
+    return np.stack(oris).astype(np.float32), np.stack(accs).astype(np.float32)
+
+
+def torch_outputs(net: PoseNet, ori, acc) -> dict:
+    with torch.no_grad():
+        r, v, c, (h, cc) = net(torch.from_numpy(ori), torch.from_numpy(acc))
+    return {"joint_rotations": r.numpy(), "root_velocity": v.numpy(), "foot_contact": c.numpy(),
+            "state_out_h": h.numpy(), "state_out_c": cc.numpy()}
+
+
+def check_against_torch(net: PoseNet, paths: dict, ori=None, acc=None, stream_frames: int = 60) -> dict:
+    """Max abs difference per output, ONNX Runtime vs PyTorch, for each file; plus the
+    difference between streaming (T=1 per call) and one whole-clip call on the fp32 file."""
+    from . import ort
+    if ori is None:
+        ori, acc = fixture_inputs()
+    ref = torch_outputs(net, ori, acc)
+    report = {}
+    for tag, p in paths.items():
+        out = ort.run_onnx(p, ori, acc)
+        report[tag] = {k: float(np.max(np.abs(out[k] - ref[k]))) for k in OUTPUT_NAMES}
+    p32 = paths.get("fp32")
+    if p32 is not None:
+        n = min(stream_frames, ori.shape[1])
+        whole = ort.run_onnx(p32, ori[:, :n], acc[:, :n])
+        streamed = ort.run_onnx(p32, ori[:, :n], acc[:, :n], stream=True)
+        report["stream_vs_whole_fp32"] = {k: float(np.max(np.abs(whole[k] - streamed[k])))
+                                          for k in OUTPUT_NAMES}
+    return report
+
+
+def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True) -> dict:
+    out_dir = Path(out_dir)
+    p32, p16 = out_dir / FP32_NAME, out_dir / FP16_NAME
+    export_fp32(net, p32, model_name)
+    convert_fp16(p32, p16)
+    info = {"fp32": str(p32), "fp16": str(p16), "fp32_bytes": p32.stat().st_size,
+            "fp16_bytes": p16.stat().st_size, "parameters": count_parameters(net),
+            "state_layers": net.state_layers, "state_size": net.state_size}
+    if check:
+        from . import ort
+        if ort.onnx_runtime_available():
+            info["check"] = check_against_torch(net, {"fp32": p32, "fp16": p16})
+        else:
+            info["check"] = "skipped: ONNX Runtime not available (scripts/fetch_onnxruntime.sh)"
+    return info
+
+
+def main(args) -> int:
+    if getattr(args, "untrained", False):
+        net = untrained_model(seed=getattr(args, "seed", 0))
+        name = "mocap-pose untrained (random init, seed %d)" % getattr(args, "seed", 0)
+    else:
+        ckpt = Path(getattr(args, "checkpoint", None) or DEFAULT_CHECKPOINT)
+        if not ckpt.is_file():
+            print(f"export: no checkpoint at {ckpt} (train first, or pass --untrained)")
+            return 2
+        net, ck = load_checkpoint(ckpt)
+        name = f"mocap-pose lstm{net.state_layers}x{net.state_size} step {ck.get('step', '?')}"
+    info = export(net, getattr(args, "out", None) or DEFAULT_OUT, model_name=name,
+                  check=not getattr(args, "no_check", False))
+    print(json.dumps(info, indent=1))
+    return 0
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--checkpoint", default=None, help=f"checkpoint (default {DEFAULT_CHECKPOINT.relative_to(REPO)})")
+    parser.add_argument("--untrained", action="store_true", help="export a seeded random-init model")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", default=None, help=f"output folder (default {DEFAULT_OUT.relative_to(REPO)})")
+    parser.add_argument("--no-check", dest="no_check", action="store_true",
+                        help="skip the ONNX Runtime vs PyTorch comparison")

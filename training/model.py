@@ -1,0 +1,203 @@
+"""Streaming pose network (owner: model).
+
+PoseNet maps the six calibrated IMU signals of the contract (global bone orientations and
+bone accelerations, model frame, physical units) to joint rotations, root velocity and foot
+contact probabilities. It is causal and its only memory is the LSTM state (h, c) of shape
+[STATE_LAYERS, B, STATE_SIZE], so one call with T frames equals T calls with T = 1 and the
+per-frame cost does not depend on the session length.
+
+Every normalisation happens inside the module (and so inside the exported ONNX graph):
+
+* heading removal: the pelvis heading is the horizontal direction
+  h = f_xz - f_y * u_xz, f = column 2 (forward) and u = column 1 (up) of the pelvis matrix.
+  For an upright or bent-over pelvis h points along the projected forward axis; the u term keeps
+  it defined when the pelvis forward axis is vertical (lying on the back or front). It rotates
+  exactly with any yaw of the whole body. Ry(heading) is built from the normalised (x, z) of h,
+  no atan2 (ONNX has none);
+* features per frame (132 values): the six orientations and accelerations in the heading frame
+  (Ry^T R_i, Ry^T a_i) and the five non-pelvis sensors relative to the pelvis
+  (R_0^T R_i, R_0^T (a_i - a_0)); accelerations are divided by ACC_SCALE;
+* outputs are mapped back: joint 0 (pelvis) is predicted in the heading frame as a residual on
+  the measured heading-free pelvis orientation and rotated back by Ry; joints 1..23 are residuals
+  on the identity (rest pose); root velocity is predicted in the heading frame and rotated back.
+
+Rotations are predicted as 6D (first two matrix columns) and orthonormalised by Gram-Schmidt.
+Only export-friendly ops are used (matmul, slicing, elementwise, LSTM, no atan2).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, asdict
+
+import torch
+import torch.nn as nn
+
+NUM_SENSORS = 6
+NUM_JOINTS = 24
+ACC_SCALE = 30.0            # m/s^2 -> network units (TransPose uses the same divisor)
+FEATURE_SIZE = 6 * 9 + 6 * 3 + 5 * 9 + 5 * 3   # 132
+OUTPUT_SIZE = NUM_JOINTS * 6 + 3 + 2           # 149
+
+
+@dataclass
+class ModelConfig:
+    embed: int = 256          # per-frame MLP width
+    hidden: int = 384         # LSTM state size H
+    layers: int = 2           # LSTM layers L
+    head: int = 256           # output MLP width
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+DEFAULT_CONFIG = ModelConfig()
+STATE_LAYERS = DEFAULT_CONFIG.layers
+STATE_SIZE = DEFAULT_CONFIG.hidden
+
+
+# ----------------------------------------------------------------------------- rotation helpers
+def _norm(v: torch.Tensor, eps: float = 1e-8) -> torch.Tensor:
+    return torch.sqrt((v * v).sum(-1, keepdim=True) + eps)
+
+
+def _cross(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    ax, ay, az = a[..., 0:1], a[..., 1:2], a[..., 2:3]
+    bx, by, bz = b[..., 0:1], b[..., 1:2], b[..., 2:3]
+    return torch.cat([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], dim=-1)
+
+
+def rot6d_to_matrix(x: torch.Tensor) -> torch.Tensor:
+    """(..., 6) = (column 0, column 1) -> (..., 3, 3) rotation by Gram-Schmidt."""
+    a1, a2 = x[..., 0:3], x[..., 3:6]
+    b1 = a1 / _norm(a1)
+    b2 = a2 - (b1 * a2).sum(-1, keepdim=True) * b1
+    b2 = b2 / _norm(b2)
+    b3 = _cross(b1, b2)
+    return torch.stack([b1, b2, b3], dim=-1)
+
+
+def matrix_to_rot6d(m: torch.Tensor) -> torch.Tensor:
+    """(..., 3, 3) -> (..., 6): column 0 then column 1."""
+    return torch.cat([m[..., :, 0], m[..., :, 1]], dim=-1)
+
+
+def heading_rotation(pelvis: torch.Tensor) -> torch.Tensor:
+    """Ry(heading) of pelvis orientations (..., 3, 3), built without atan2."""
+    f = pelvis[..., :, 2]
+    u = pelvis[..., :, 1]
+    hx = f[..., 0] - f[..., 1] * u[..., 0]
+    hz = f[..., 2] - f[..., 1] * u[..., 2]
+    n = torch.sqrt(hx * hx + hz * hz + 1e-8)
+    s = hx / n
+    c = hz / n
+    z = torch.zeros_like(c)
+    o = torch.ones_like(c)
+    rows = [torch.stack([c, z, s], dim=-1),
+            torch.stack([z, o, z], dim=-1),
+            torch.stack([-s, z, c], dim=-1)]
+    return torch.stack(rows, dim=-2)
+
+
+def forward_kinematics_torch(local_rot: torch.Tensor, offsets: torch.Tensor, parents) -> tuple:
+    """local_rot (..., 24, 3, 3) with joint 0 global, offsets (..., 24, 3) broadcastable.
+
+    Returns (global_rot (..., 24, 3, 3), positions (..., 24, 3) relative to the root joint)."""
+    g = [local_rot[..., 0, :, :]]
+    p = [torch.zeros_like(local_rot[..., 0, :, 0])]
+    for j in range(1, len(parents)):
+        par = parents[j]
+        g.append(g[par] @ local_rot[..., j, :, :])
+        off = offsets[..., j, :].unsqueeze(-1)
+        p.append(p[par] + (g[par] @ off).squeeze(-1))
+    return torch.stack(g, dim=-3), torch.stack(p, dim=-2)
+
+
+# ----------------------------------------------------------------------------- network
+class PoseNet(nn.Module):
+    """Streaming IMU -> pose network. See the module docstring."""
+
+    def __init__(self, config: ModelConfig | None = None):
+        super().__init__()
+        self.config = config or ModelConfig()
+        c = self.config
+        self.embed = nn.Sequential(
+            nn.Linear(FEATURE_SIZE, c.embed), nn.ReLU(),
+            nn.Linear(c.embed, c.embed), nn.ReLU())
+        self.lstm = nn.LSTM(c.embed, c.hidden, num_layers=c.layers, batch_first=True)
+        self.head = nn.Sequential(nn.Linear(c.hidden, c.head), nn.ReLU(),
+                                  nn.Linear(c.head, OUTPUT_SIZE))
+        # Small last layer: an untrained model outputs roughly the rest pose with the measured
+        # pelvis orientation, zero velocity and 50 % contact.
+        with torch.no_grad():
+            self.head[-1].weight.mul_(0.01)
+            self.head[-1].bias.zero_()
+        ident = torch.tensor([1.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+        self.register_buffer("identity6d", ident, persistent=False)
+
+    @property
+    def state_layers(self) -> int:
+        return self.config.layers
+
+    @property
+    def state_size(self) -> int:
+        return self.config.hidden
+
+    def zero_state(self, batch: int, device=None) -> tuple:
+        shape = (self.config.layers, batch, self.config.hidden)
+        z = torch.zeros(shape, device=device)
+        return z, z.clone()
+
+    def features(self, ori: torch.Tensor, acc: torch.Tensor) -> tuple:
+        """ori (B,T,6,3,3), acc (B,T,6,3) -> (features (B,T,132), Ry (B,T,3,3), pelvis in heading frame)."""
+        r0 = ori[:, :, 0]
+        ry = heading_rotation(r0)
+        ryt = ry.transpose(-1, -2).unsqueeze(2)
+        rg = ryt @ ori                                             # (B,T,6,3,3)
+        ag = (ryt @ acc.unsqueeze(-1)).squeeze(-1)                 # (B,T,6,3)
+        r0t = r0.transpose(-1, -2).unsqueeze(2)
+        rrel = r0t @ ori[:, :, 1:]                                 # (B,T,5,3,3)
+        arel = (r0t @ (acc[:, :, 1:] - acc[:, :, 0:1]).unsqueeze(-1)).squeeze(-1)
+        feat = torch.cat([rg.flatten(2), ag.flatten(2) / ACC_SCALE,
+                          rrel.flatten(2), arel.flatten(2) / ACC_SCALE], dim=-1)
+        return feat, ry, rg[:, :, 0]
+
+    def forward_raw(self, ori, acc, state=None):
+        """Returns (joint_rotations, root_velocity, contact_logits, (h, c))."""
+        b, t = ori.shape[0], ori.shape[1]
+        feat, ry, pelvis_h = self.features(ori, acc)
+        x = self.embed(feat)
+        if state is None:
+            state = self.zero_state(b, ori.device)
+        y, (h, c) = self.lstm(x, (state[0], state[1]))
+        out = self.head(y)
+        rot6 = out[..., :NUM_JOINTS * 6].reshape(b, t, NUM_JOINTS, 6)
+        base0 = matrix_to_rot6d(pelvis_h).unsqueeze(2)                  # (B,T,1,6)
+        base = torch.cat([base0, self.identity6d.expand(b, t, NUM_JOINTS - 1, 6)], dim=2)
+        rot = rot6d_to_matrix(rot6 + base)
+        root_global = ry @ rot[:, :, 0]
+        rot = torch.cat([root_global.unsqueeze(2), rot[:, :, 1:]], dim=2)
+        vel_h = out[..., NUM_JOINTS * 6:NUM_JOINTS * 6 + 3]
+        vel = (ry @ vel_h.unsqueeze(-1)).squeeze(-1)
+        logits = out[..., NUM_JOINTS * 6 + 3:NUM_JOINTS * 6 + 5]
+        return rot, vel, logits, (h, c)
+
+    def forward(self, imu_orientation, imu_acceleration, state=None):
+        """Contract forward: (joint_rotations, root_velocity, foot_contact (0..1), (h, c))."""
+        rot, vel, logits, st = self.forward_raw(imu_orientation, imu_acceleration, state)
+        return rot, vel, torch.sigmoid(logits), st
+
+
+class ExportWrapper(nn.Module):
+    """Flat signature of the ONNX contract: 4 inputs, 5 outputs."""
+
+    def __init__(self, net: PoseNet):
+        super().__init__()
+        self.net = net
+
+    def forward(self, imu_orientation, imu_acceleration, state_in_h, state_in_c):
+        rot, vel, contact, (h, c) = self.net(imu_orientation, imu_acceleration,
+                                             (state_in_h, state_in_c))
+        return rot, vel, contact, h, c
+
+
+def count_parameters(net: nn.Module) -> int:
+    return sum(p.numel() for p in net.parameters())

@@ -1,0 +1,220 @@
+"""synth-capture: a BVH clip -> a raw HiPNUC capture the engine can replay, plus the ground truth.
+
+    python3 -m training synth-capture CLIP.bvh --out CAPTURE [--truth POSE.npz]
+        [--sensor-truth CSV] [--seed N] [--world nwu|enu] [--noise realistic|none]
+        [--lead-in S] [--keep-trajectory]
+
+Steps: BVH -> Motion (bvh.read_bvh + retarget.to_smpl_motion, 60 Hz) -> a lead-in of S seconds
+(default 1) blending from the rest T-pose (every joint identity, facing +Z, as the calibration
+prelude ends) into the clip's first frame -> per-segment sensor signals (bone orientation and
+sensor linear acceleration in the model frame, gravity excluded: synthesis.synthesize without
+augmentation) resampled to 100 Hz -> the trajectory text file of
+Packages/com.mocap.imu/Native~/docs/synth-trajectory.md -> `mocapctl synth --trajectory FILE
+--out CAPTURE --truth SENSOR_CSV --noise realistic --seed N --world W`, which adds the
+calibration prelude (heading 3 s, strapping 2 s, T-pose 3 s), random mountings and headings and
+realistic sensor noise.
+
+Ground truth pose file (--truth, default CAPTURE with suffix .truth.npz), numpy .npz:
+    local_rot        (N,24,3,3) float32  joint 0 global (model frame), others local to parent
+    root_pos         (N,3) float32       metres, model frame
+    offsets          (24,3) float32      the retargeted skeleton's rest offsets
+    fps              ()                  frames per second of the truth (60)
+    joint_names      (24,) str, parents (24,) int
+    motion_start     ()  int             truth frame where the clip itself begins (after lead-in)
+    t_session_start  ()  float           session time (s) of truth frame 0 = the replayed frames'
+                                         time_s clock (`mocap_frame.time_s`); frame i is at
+                                         t_session_start + i / fps
+    prelude_s        ()  float           calibration prelude length in the capture
+    clip, world, seed                    provenance
+The engine's own per-sensor truth (bone quaternions + accelerations per 100 Hz tick, phases) is
+written by mocapctl to --sensor-truth (default CAPTURE with suffix .sensors.csv); `mocapctl
+replay CAPTURE --truth SENSOR_CSV` compares the calibrated output against it.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import skeleton as sk
+
+TRAJECTORY_RATE = 100.0
+
+
+def _smooth(u):
+    u = np.clip(u, 0.0, 1.0)
+    return u * u * u * (u * (6 * u - 15) + 10)
+
+
+def with_lead_in(motion: sk.Motion, seconds: float = 1.0) -> sk.Motion:
+    """The motion preceded by `seconds` of a blend from the rest T-pose (identity rotations, root
+    above the first frame's floor point at rest pelvis height) into its first frame."""
+    n = int(round(seconds * motion.fps))
+    if n <= 0:
+        return motion
+    u = _smooth(np.arange(n) / n)
+    first = motion.local_rot[0].astype(np.float64)
+    eye = np.broadcast_to(np.eye(3), first.shape)
+    rots = np.stack([sk.slerp_rot(eye, first, ui) for ui in u]).astype(np.float32)
+    r0 = motion.root_pos[0].astype(np.float64)
+    rest = np.array([r0[0], motion.offsets[0, 1], r0[2]])
+    roots = (rest[None] + u[:, None] * (r0 - rest)[None]).astype(np.float32)
+    return sk.Motion(motion.name, motion.subject, motion.fps,
+                     np.concatenate([rots, motion.local_rot]).astype(np.float32),
+                     np.concatenate([roots, motion.root_pos]).astype(np.float32), motion.offsets)
+
+
+def sensor_signals(motion: sk.Motion):
+    """(orientation (T,6,3,3) bone -> model, acceleration (T,6,3) m/s^2 model frame, gravity
+    excluded) at the motion's frame rate, from synthesis.synthesize without augmentation."""
+    try:
+        from .synthesis import synthesize
+    except ImportError:  # synthesis.py not present: the plain kinematic signals below
+        return kinematic_signals(motion)
+    sample = synthesize(motion, rng=None, augment=None)
+    return (np.asarray(sample.imu_orientation, np.float64),
+            np.asarray(sample.imu_acceleration, np.float64))
+
+
+def kinematic_signals(motion: sk.Motion):
+    """Fallback without synthesis.py: orientation = global rotation of each sensor's bone;
+    acceleration = central second difference of a point on it (pelvis root, wrist joints, shin
+    midpoints, head joint), ends repeated."""
+    g, p = sk.forward_kinematics(motion.local_rot.astype(np.float64),
+                                 motion.root_pos.astype(np.float64), motion.offsets)
+    ori = g[:, sk.SENSOR_JOINTS]
+    pts = p[:, sk.SENSOR_JOINTS].copy()
+    pts[:, 3] = 0.5 * (p[:, 4] + p[:, 7])
+    pts[:, 4] = 0.5 * (p[:, 5] + p[:, 8])
+    acc = np.zeros_like(pts)
+    if len(pts) >= 3:
+        acc[1:-1] = (pts[2:] - 2 * pts[1:-1] + pts[:-2]) * motion.fps ** 2
+        acc[0], acc[-1] = acc[1], acc[-2]
+    return ori, acc
+
+
+def resample_signals(orientation, acceleration, fps, rate=TRAJECTORY_RATE):
+    """Slerp orientations / lerp accelerations from fps to rate. Returns t, quats (N,6,4), acc."""
+    T = orientation.shape[0]
+    duration = (T - 1) / fps
+    t = np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
+    x = t * fps
+    i0 = np.minimum(np.floor(x).astype(int), T - 1)
+    i1 = np.minimum(i0 + 1, T - 1)
+    w = (x - i0)
+    q = sk.quat_from_rot(orientation)                              # (T,6,4)
+    quats = sk.slerp_quat(q[i0], q[i1], np.broadcast_to(w[:, None], (len(t), 6)))
+    acc = acceleration[i0] + w[:, None, None] * (acceleration[i1] - acceleration[i0])
+    return t, quats, acc
+
+
+def write_trajectory(path, t, quats, acc, comment=""):
+    """The text format of Native~/docs/synth-trajectory.md (43 numbers per line)."""
+    with open(path, "w") as f:
+        f.write("# synth-capture trajectory" + (f": {comment}" if comment else "") + "\n")
+        f.write("# t  then per segment (" + ", ".join(sk.SENSOR_NAMES) + "): qw qx qy qz ax ay az\n")
+        for k in range(len(t)):
+            vals = [f"{t[k]:.5f}"]
+            for s in range(6):
+                vals += [f"{v:.7f}" for v in quats[k, s]] + [f"{v:.5f}" for v in acc[k, s]]
+            f.write(" ".join(vals) + "\n")
+
+
+def _read_motion_start(sensor_csv) -> tuple[float, float]:
+    """(session time of the first row, session time of the first motion-phase row)."""
+    first = start = None
+    with open(sensor_csv) as f:
+        for line in f:
+            if not line[:1].isdigit() and line[:1] != "-":
+                continue
+            parts = line.replace(",", " ").split()
+            t, phase = float(parts[0]), int(float(parts[1]))
+            if first is None:
+                first = t
+            if phase == 3:
+                start = t
+                break
+    if first is None or start is None:
+        raise RuntimeError(f"{sensor_csv}: no motion phase rows")
+    return first, start
+
+
+def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="nwu",
+                  noise="realistic", lead_in=1.0, keep_trajectory=False, motion=None):
+    """Write CAPTURE, its sensor truth CSV and the pose truth .npz; returns a dict of paths and
+    facts. `motion` (a Motion) replaces reading bvh_path when given."""
+    from .ort import mocapctl_path
+    out = Path(out)
+    truth = Path(truth) if truth else out.with_suffix(".truth.npz")
+    sensor_truth = Path(sensor_truth) if sensor_truth else out.with_suffix(".sensors.csv")
+    if motion is None:
+        from .bvh import read_bvh
+        from .retarget import to_smpl_motion
+        name = Path(bvh_path).stem
+        motion = to_smpl_motion(read_bvh(bvh_path), name=name)
+    full = with_lead_in(motion, lead_in)
+    ori, acc = sensor_signals(full)
+    t, quats, acc100 = resample_signals(ori, acc, full.fps)
+    traj = out.with_suffix(".trajectory.txt")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_trajectory(traj, t, quats, acc100, comment=f"{motion.name}, lead-in {lead_in} s")
+    cmd = [str(mocapctl_path(require_onnx=False)), "synth", "--trajectory", str(traj), "--out", str(out),
+           "--truth", str(sensor_truth), "--seed", str(int(seed)), "--world", world,
+           "--noise", noise]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"mocapctl synth failed: {r.stderr.strip()}")
+    if not keep_trajectory:
+        traj.unlink()
+    t_first, t_motion = _read_motion_start(sensor_truth)
+    n_lead = full.num_frames - motion.num_frames
+    np.savez(truth, local_rot=full.local_rot, root_pos=full.root_pos, offsets=full.offsets,
+             fps=np.float64(full.fps), joint_names=np.array(sk.JOINT_NAMES),
+             parents=np.array(sk.PARENTS), motion_start=np.int64(n_lead),
+             t_session_start=np.float64(t_motion), prelude_s=np.float64(t_motion - t_first),
+             clip=str(motion.name), world=world, seed=np.int64(seed))
+    return {"capture": out, "truth": truth, "sensor_truth": sensor_truth,
+            "trajectory": traj if keep_trajectory else None, "frames": full.num_frames,
+            "motion_start": n_lead, "t_session_start": t_motion, "prelude_s": t_motion - t_first,
+            "mocapctl": r.stdout.strip()}
+
+
+def load_truth(path) -> dict:
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
+def add_arguments(p=None):
+    p = p or argparse.ArgumentParser(prog="python3 -m training synth-capture",
+                                     description=__doc__.split("\n")[0])
+    p.add_argument("bvh", help="BVH clip (CMU Daz, cgspeed, or our SMPL-24 skeleton)")
+    p.add_argument("--out", required=True, help="capture file to write")
+    p.add_argument("--truth", help="pose truth .npz (default: CAPTURE.truth.npz)")
+    p.add_argument("--sensor-truth", help="per-sensor truth CSV from mocapctl (default: CAPTURE.sensors.csv)")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--world", choices=["nwu", "enu"], default="nwu")
+    p.add_argument("--noise", choices=["realistic", "none"], default="realistic")
+    p.add_argument("--lead-in", type=float, default=1.0, help="seconds of T-pose -> clip blend")
+    p.add_argument("--keep-trajectory", action="store_true", help="keep CAPTURE.trajectory.txt")
+    return p
+
+
+def main(args=None):
+    if args is None or isinstance(args, list):
+        args = add_arguments().parse_args(args)
+    info = synth_capture(args.bvh, args.out, args.truth, args.sensor_truth, args.seed, args.world,
+                         args.noise, args.lead_in, args.keep_trajectory)
+    print(info["mocapctl"])
+    print(f"synth-capture: {info['capture']} ({info['frames']} truth frames, clip from frame "
+          f"{info['motion_start']}, truth frame 0 at session t={info['t_session_start']:.3f} s "
+          f"after a {info['prelude_s']:.1f} s prelude); pose truth {info['truth']}, sensor truth "
+          f"{info['sensor_truth']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

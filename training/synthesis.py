@@ -1,0 +1,258 @@
+"""Virtual IMUs on a Motion: the inputs the calibrated engine feeds the model, and the targets
+(owner: model).
+
+Sensors ride on the six contract segments (skeleton.SENSOR_JOINTS) at fixed offsets in the bone
+frame (bone frames are parallel to the model frame in the T-pose: X left, Y up, Z forward):
+
+| sensor | joint | offset (default proportions, scaled with the body) |
+|---|---|---|
+| pelvis | 0 pelvis | (0, +0.05, -0.11) m: on the lower back (sacrum / L5), behind the pelvis joint |
+| left / right wrist | 20 / 21 | (-/+0.03, +0.035, 0) m: back of the wrist (the top in a palms-down T-pose), 3 cm up the forearm |
+| left / right shin | 4 / 5 knee | 40 % of the knee -> ankle bone, plus 5 cm forward: the front of the shin |
+| head | 15 head (skull base) | (0, +0.13, 0) m: above the ears (headband) |
+
+* Orientation = global rotation of the sensor's bone (what the engine's T-pose calibration
+  reports); a mounting rotation only matters for the raw sensor signals (`raw_sensor_signals`).
+* Acceleration = central second difference of the sensor's world position over +-k frames,
+  (p[t+k] - 2 p[t] + p[t-k]) / (k dt)^2 with k = ACC_K = 4 at 60 Hz (+-67 ms, TIP's choice).
+  The CMU clips are 24 fps resampled to 60 Hz by slerp, so positions are only piecewise smooth
+  at the 60 Hz frame level: k = 1 would turn every source key into an acceleration spike, while
+  +-4 frames spans more than three source frames and averages them out. The kernel is
+  centred (no lag), like the instantaneous accelerometer reading. At the clip ends k shrinks.
+  Gravity removed, model frame, m/s^2: exactly the engine's `bone_acceleration`.
+* Targets: local joint rotations (joint 0 global), root (pelvis) velocity in the model frame
+  (central difference, m/s), foot contact, joint positions (model frame, metres).
+* Foot contact (per foot joint 10 / 11, the ball of the foot): speed below CONTACT_SPEED
+  (0.25 m/s, central difference) AND height within CONTACT_HEIGHT (0.06 m) of the lowest foot
+  (either foot) within +-CONTACT_WINDOW frames (0.5 s), which follows stairs and slopes.
+
+Augmentation (training only, all draws from the given numpy Generator), see `Augmentation`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import skeleton as sk
+
+GRAVITY = 9.80665
+ACC_K = 4
+CONTACT_SPEED = 0.25
+CONTACT_HEIGHT = 0.06
+CONTACT_WINDOW = 30
+
+PELVIS_SENSOR_OFFSET = (0.0, 0.05, -0.11)
+WRIST_SENSOR_OFFSET = (0.03, 0.035, 0.0)     # x mirrored: towards the elbow
+HEAD_SENSOR_OFFSET = (0.0, 0.13, 0.0)
+SHIN_FRACTION = 0.4
+SHIN_FORWARD = 0.05
+
+
+@dataclass
+class Augmentation:
+    """Training-time augmentation. Angles in degrees, accelerations in m/s^2."""
+    scale: tuple = (0.9, 1.1)        # body scale U(a, b): offsets and root trajectory
+    heading: bool = True             # random yaw of the whole clip, U(-180, 180)
+    mounting_deg: float = 2.5        # per-axis sigma of a fixed per-sensor calibration error
+                                     # (right-multiplied, bone frame; |error| ~ 4 deg on average)
+    heading_drift_deg: float = 2.0   # fixed per-sensor yaw error of the sensor world, U(+-x)
+    orientation_noise_deg: float = 0.3   # per-axis sigma per frame (|noise| ~ 0.5 deg)
+    acc_noise: float = 0.1           # per-axis sigma per frame
+    acc_bias: float = 0.1            # per-axis U(+-x) per sensor per sequence
+    drop_rate: float = 0.005         # probability per sensor per frame that a drop-out starts
+    drop_max_frames: int = 6         # drop-out length U{1..n} frames: the last sample is held
+
+
+@dataclass
+class Sample:
+    name: str
+    fps: float
+    imu_orientation: np.ndarray      # (T,6,3,3) float32, bone -> model
+    imu_acceleration: np.ndarray     # (T,6,3) float32, m/s^2, model frame, gravity removed
+    local_rot: np.ndarray            # (T,24,3,3) float32, joint 0 global
+    root_velocity: np.ndarray        # (T,3) float32, m/s, model frame
+    foot_contact: np.ndarray         # (T,2) float32 in {0, 1}
+    positions: np.ndarray            # (T,24,3) float32, model frame
+    offsets: np.ndarray              # (24,3) float32 (after body scaling)
+    root_pos: np.ndarray             # (T,3) float32
+    sensor_position: np.ndarray      # (T,6,3) float32
+
+    @property
+    def num_frames(self) -> int:
+        return int(self.local_rot.shape[0])
+
+
+# ------------------------------------------------------------------------------ helpers
+def _ry(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def sensor_offsets(offsets) -> np.ndarray:
+    """(6,3) sensor positions in their bone frames for a skeleton with these offsets."""
+    o = np.asarray(offsets, dtype=np.float64)
+    s = sk.leg_height(o) / sk.leg_height(sk.DEFAULT_OFFSETS)
+    wx, wy, wz = WRIST_SENSOR_OFFSET
+    out = np.zeros((6, 3))
+    out[0] = np.asarray(PELVIS_SENSOR_OFFSET) * s
+    out[1] = np.array([-wx, wy, wz]) * s          # left arm points +X: the elbow is at -X
+    out[2] = np.array([wx, wy, wz]) * s
+    for i, ankle in ((3, 7), (4, 8)):
+        out[i] = SHIN_FRACTION * o[ankle] + np.array([0.0, 0.0, SHIN_FORWARD * s])
+    out[5] = np.asarray(HEAD_SENSOR_OFFSET) * s
+    return out
+
+
+def second_difference(pos: np.ndarray, fps: float, k: int = ACC_K) -> np.ndarray:
+    """Acceleration (T,...) of positions (T,...) by a centred second difference over +-k frames;
+    k shrinks at the ends (to 1; the first and last frame copy their neighbour)."""
+    pos = np.asarray(pos, dtype=np.float64)
+    T = pos.shape[0]
+    acc = np.zeros_like(pos)
+    if T < 3:
+        return acc
+    dt = 1.0 / fps
+    t = np.arange(T)
+    kk = np.minimum(np.minimum(t, T - 1 - t), k)
+    for kv in range(1, k + 1):
+        idx = np.nonzero(kk == kv)[0]
+        if idx.size:
+            acc[idx] = (pos[idx + kv] - 2.0 * pos[idx] + pos[idx - kv]) / (kv * dt) ** 2
+    acc[0] = acc[1]
+    acc[-1] = acc[-2]
+    return acc
+
+
+def central_velocity(pos: np.ndarray, fps: float) -> np.ndarray:
+    pos = np.asarray(pos, dtype=np.float64)
+    if pos.shape[0] < 2:
+        return np.zeros_like(pos)
+    return np.gradient(pos, axis=0) * fps
+
+
+def foot_contact_labels(positions: np.ndarray, fps: float) -> np.ndarray:
+    """(T,24,3) joint positions -> (T,2) contact labels for skeleton.FOOT_JOINTS."""
+    feet = np.asarray(positions, dtype=np.float64)[:, sk.FOOT_JOINTS]           # (T,2,3)
+    speed = np.linalg.norm(central_velocity(feet, fps), axis=-1)                  # (T,2)
+    low = feet[:, :, 1].min(axis=1)                                               # (T,)
+    w = int(round(CONTACT_WINDOW * fps / sk.MODEL_FPS))
+    padded = np.pad(low, (w, w), mode="edge")
+    nb_min = np.lib.stride_tricks.sliding_window_view(padded, 2 * w + 1).min(axis=-1)
+    near = feet[:, :, 1] - nb_min[:, None] < CONTACT_HEIGHT
+    return ((speed < CONTACT_SPEED) & near).astype(np.float32)
+
+
+def _small_rotations(rng, n, sigma_deg) -> np.ndarray:
+    return sk.axis_angle_to_rot(rng.normal(scale=np.deg2rad(sigma_deg), size=(n, 3)))
+
+
+def _hold_drops(rng, x: np.ndarray, rate: float, max_len: int) -> np.ndarray:
+    """x (T,6,...): per sensor, drop-outs hold the last sample."""
+    T = x.shape[0]
+    for s in range(x.shape[1]):
+        starts = np.nonzero(rng.random(T) < rate)[0]
+        for t0 in starts:
+            if t0 == 0:
+                continue
+            n = int(rng.integers(1, max_len + 1))
+            x[t0:t0 + n, s] = x[t0 - 1, s]
+    return x
+
+
+# ------------------------------------------------------------------------------ synthesis
+def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K) -> Sample:
+    """Motion -> Sample. augment: None/False (exact signals), True (default Augmentation) or an
+    Augmentation; rng: numpy Generator (default seeded 0) for the augmentation draws."""
+    if augment is True:
+        augment = Augmentation()
+    if augment and rng is None:
+        rng = np.random.default_rng(0)
+    fps = float(motion.fps)
+    local = np.asarray(motion.local_rot, dtype=np.float64).copy()
+    root = np.asarray(motion.root_pos, dtype=np.float64).copy()
+    offsets = np.asarray(motion.offsets, dtype=np.float64).copy()
+    if augment:
+        s = rng.uniform(*augment.scale)
+        offsets *= s
+        root *= s
+        if augment.heading:
+            r = _ry(rng.uniform(-np.pi, np.pi))
+            local[:, 0] = r @ local[:, 0]
+            root = root @ r.T
+    g, p = sk.forward_kinematics(local, root, offsets)
+    bone = g[:, sk.SENSOR_JOINTS]                                                  # (T,6,3,3)
+    spos = p[:, sk.SENSOR_JOINTS] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(offsets))
+    acc = second_difference(spos, fps, k)
+    ori = bone.copy()
+    if augment:
+        n = 6
+        mount = _small_rotations(rng, n, augment.mounting_deg)                      # (6,3,3)
+        drift = np.stack([_ry(a) for a in np.deg2rad(
+            rng.uniform(-augment.heading_drift_deg, augment.heading_drift_deg, n))])
+        ori = np.einsum("sab,tsbc,scd->tsad", drift, ori, mount)
+        T = ori.shape[0]
+        noise = _small_rotations(rng, T * n, augment.orientation_noise_deg).reshape(T, n, 3, 3)
+        ori = ori @ noise
+        acc = np.einsum("sab,tsb->tsa", drift, acc)
+        acc = acc + rng.uniform(-augment.acc_bias, augment.acc_bias, size=(1, n, 3))
+        acc = acc + rng.normal(scale=augment.acc_noise, size=acc.shape)
+        if augment.drop_rate > 0:
+            both = np.concatenate([ori.reshape(T, n, 9), acc], axis=-1)
+            both = _hold_drops(rng, both, augment.drop_rate, augment.drop_max_frames)
+            ori = both[..., :9].reshape(T, n, 3, 3)
+            acc = both[..., 9:]
+    f32 = np.float32
+    return Sample(
+        name=motion.name, fps=fps,
+        imu_orientation=ori.astype(f32), imu_acceleration=acc.astype(f32),
+        local_rot=local.astype(f32), root_velocity=central_velocity(root, fps).astype(f32),
+        foot_contact=foot_contact_labels(p, fps), positions=p.astype(f32),
+        offsets=offsets.astype(f32), root_pos=root.astype(f32), sensor_position=spos.astype(f32))
+
+
+# ------------------------------------------------------------------------------ raw sensors
+def specific_force_sensor_frame(sensor_orientation, acceleration) -> np.ndarray:
+    """What an accelerometer reads, in g, in its own frame: R_model_sensor^T (a + g_up) / g.
+
+    sensor_orientation (...,3,3) sensor -> model; acceleration (...,3) model frame m/s^2
+    (gravity removed). At rest the reading is +1 g along the sensor axis that points up."""
+    r = np.asarray(sensor_orientation, dtype=np.float64)
+    a = np.asarray(acceleration, dtype=np.float64) + np.array([0.0, GRAVITY, 0.0])
+    return np.einsum("...ba,...b->...a", r, a) / GRAVITY
+
+
+def angular_rate_sensor_frame(sensor_orientation, fps: float) -> np.ndarray:
+    """Angular velocity (T,...,3) rad/s in the sensor frame from orientations (T,...,3,3)
+    (sensor -> model), central difference: log(R[t-1]^T R[t+1]) / (2 dt)."""
+    r = np.asarray(sensor_orientation, dtype=np.float64)
+    T = r.shape[0]
+    if T < 2:
+        return np.zeros(r.shape[:-1])
+    prev = np.concatenate([r[:1], r[:-2], r[-2:-1]], axis=0)
+    nxt = np.concatenate([r[1:2], r[2:], r[-1:]], axis=0)
+    span = np.full(T, 2.0)
+    span[0] = span[-1] = 1.0
+    rel = np.swapaxes(prev, -1, -2) @ nxt
+    w = sk.rot_to_axis_angle(rel) * fps
+    return w / span.reshape((T,) + (1,) * (w.ndim - 1))
+
+
+def raw_sensor_signals(motion: sk.Motion, mounting=None, k: int = ACC_K) -> dict:
+    """Ideal raw signals of the six sensors (no noise) for a Motion.
+
+    mounting: (6,3,3) sensor -> bone rotations (identity if None). Returns float64 arrays:
+    sensor_orientation (T,6,3,3) sensor -> model, bone_orientation (T,6,3,3),
+    position (T,6,3) model frame, acceleration (T,6,3) model frame m/s^2 gravity removed,
+    specific_force_g (T,6,3) sensor frame in g, angular_rate (T,6,3) sensor frame rad/s."""
+    fps = float(motion.fps)
+    g, p = sk.forward_kinematics(np.asarray(motion.local_rot, np.float64),
+                                 np.asarray(motion.root_pos, np.float64), motion.offsets)
+    bone = g[:, sk.SENSOR_JOINTS]
+    spos = p[:, sk.SENSOR_JOINTS] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(motion.offsets))
+    acc = second_difference(spos, fps, k)
+    m = np.broadcast_to(np.eye(3), (6, 3, 3)) if mounting is None else np.asarray(mounting, np.float64)
+    sens = bone @ m
+    return {"sensor_orientation": sens, "bone_orientation": bone, "position": spos,
+            "acceleration": acc, "specific_force_g": specific_force_sensor_frame(sens, acc),
+            "angular_rate": angular_rate_sensor_frame(sens, fps)}

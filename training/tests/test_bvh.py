@@ -1,0 +1,111 @@
+import time
+
+import numpy as np
+import pytest
+
+from training import bvh
+from training import skeleton as sk
+from training.procedural import daz_template, make_motion, motion_to_daz
+
+SAMPLE = (
+    "HIERARCHY\r\n"
+    "ROOT Hips\r\n{\r\n\tOFFSET 1 2 3\r\n"
+    "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\r\n"
+    "\tJOINT Arm\r\n\t{\r\n\t\tOFFSET 0 0 1\r\n\t\tCHANNELS 3 Xrotation Yrotation Zrotation\r\n"
+    "\t\tJOINT Slider\r\n\t\t{\r\n\t\t\tOFFSET 5 6 7\r\n"
+    "\t\t\tCHANNELS 4 Yrotation Xposition Zposition Xrotation\r\n"
+    "\t\t\tEnd Site\r\n\t\t\t{\r\n\t\t\t\tOFFSET 0 1 0\r\n\t\t\t}\r\n\t\t}\r\n\t}\r\n"
+    "\tJOINT Leg\r\n\t{\r\n\t\tOFFSET 0 -1 0\r\n\t\tEnd Site\r\n\t\t{\r\n\t\t\tOFFSET 0 -1 0\r\n\t\t}\r\n\t}\r\n"
+    "}\r\n"
+    "MOTION\r\nFrames:\t2\r\nFrame Time: 0.0833333\r\n"
+    "10 20 30 90 90 0\t0 0 0\t0 0.5 -0.5 0\r\n"
+    "0 0 0 0 0 0 30 -20 10 45 1 2 15\r\n"
+)
+
+
+def test_parse_structure_crlf_tabs_mixed_channels():
+    c = bvh.parse_bvh(SAMPLE)
+    assert c.joints == ["Hips", "Arm", "Slider", "Leg"]
+    assert c.parents == [-1, 0, 1, 0]
+    assert c.frame_time == pytest.approx(0.0833333)
+    assert c.num_frames == 2
+    assert c.channels[2] == ["Yrotation", "Xposition", "Zposition", "Xrotation"]
+    assert c.channels[3] == []
+    assert np.allclose(c.end_sites[2], [0, 1, 0]) and np.allclose(c.end_sites[3], [0, -1, 0])
+    assert np.allclose(c.offsets[0], [1, 2, 3])
+    # root position channels replace the OFFSET
+    assert np.allclose(c.root_pos[0], [10, 20, 30]) and np.allclose(c.root_pos[1], 0)
+    # position channels on a non-root joint: X and Z replaced, Y keeps the OFFSET
+    assert c.translations is not None
+    assert np.allclose(c.translations[0, 2], [0.5, 6, -0.5]) and np.allclose(c.translations[1, 2], [1, 6, 2])
+    assert np.allclose(c.rotations[:, 3], np.eye(3))           # joint without channels
+
+
+def test_intrinsic_rotation_order():
+    c = bvh.parse_bvh(SAMPLE)
+    # root Z=90 then X=90, intrinsic: R = Rz(90) Rx(90); child offset (0,0,1) -> (1,0,0).
+    # (the extrinsic reading Rx(90) Rz(90) would give (0,-1,0))
+    assert np.allclose(c.rotations[0, 0] @ [0, 0, 1], [1, 0, 0], atol=1e-12)
+    assert np.allclose(c.rotations[1, 1], sk.euler_to_rot([30, -20, 10], "XYZ"))
+    assert np.allclose(c.rotations[1, 2], sk.euler_to_rot([45, 15], "YX") if False else
+                       sk.rot_axis("y", np.radians(45)) @ sk.rot_axis("x", np.radians(15)))
+    g, p = c.global_transforms()
+    assert np.allclose(p[0, 1], [10, 20, 30] + c.rotations[0, 0] @ [0, 0, 1])
+
+
+@pytest.mark.parametrize("order", ["ZXY", "XYZ"])
+def test_write_read_roundtrip(tmp_path, order):
+    m = make_motion("mixed", 2.0, seed=5)
+    clip = motion_to_daz(m)
+    path = tmp_path / f"rt_{order}.bvh"
+    bvh.write_bvh(path, clip, order=order, decimals=6)
+    text = path.read_text()
+    assert f"CHANNELS 3 {order[0]}rotation {order[1]}rotation {order[2]}rotation" in text
+    assert "End Site" in text and "\r" not in text
+    back = bvh.read_bvh(path)
+    assert back.joints == clip.joints and back.parents == clip.parents
+    assert back.num_frames == clip.num_frames and back.frame_time == pytest.approx(clip.frame_time, abs=1e-7)
+    assert np.allclose(back.offsets, clip.offsets)
+    assert set(back.end_sites) == set(clip.end_sites)
+    assert np.degrees(sk.angle_between_rots(back.rotations, clip.rotations)).max() < 1e-3
+    assert np.abs(back.root_pos - clip.root_pos).max() < 1e-5
+
+
+def test_writer_keeps_nonroot_position_channels():
+    c = bvh.parse_bvh(SAMPLE)
+    back = bvh.parse_bvh(bvh.format_bvh(c, order="XYZ"))
+    assert back.translations is not None
+    assert np.allclose(back.translations, c.translations, atol=1e-6)
+    assert np.allclose(back.rotations, c.rotations, atol=1e-6)
+
+
+def test_errors():
+    with pytest.raises(bvh.BvhError):
+        bvh.parse_bvh("HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\n}\n")            # no MOTION
+    with pytest.raises(bvh.BvhError):
+        bvh.parse_bvh(SAMPLE.replace("15\r\n", "abc\r\n"))                   # bad number
+    with pytest.raises(bvh.BvhError):
+        bvh.parse_bvh(SAMPLE.replace("CHANNELS 3 X", "CHANNELS 3 Q"))        # bad channel
+    with pytest.warns(UserWarning):
+        short = bvh.parse_bvh(SAMPLE.replace("Frames:\t2", "Frames: 3"))
+    assert short.num_frames == 2
+
+
+def test_read_speed(tmp_path):
+    # ~1/60 of the CMU set's text in one file: must parse well under a second
+    m = make_motion("walk", 70.0, seed=1)
+    clip = motion_to_daz(m)
+    text = bvh.format_bvh(clip, decimals=4)
+    t = time.perf_counter()
+    c = bvh.parse_bvh(text)
+    dt = time.perf_counter() - t
+    assert c.num_frames == clip.num_frames
+    assert dt < 1.0, f"{len(text) / 1e6:.1f} MB parsed in {dt:.2f} s"
+
+
+def test_daz_template_is_tpose_like():
+    t = daz_template()
+    rest = t.rest_positions()
+    assert rest[t.index("lHand"), 0] > 50 and rest[t.index("rHand"), 0] < -50     # left = +X
+    low = min(rest[t.index(f), 1] + t.end_sites[t.index(f)][1] for f in ("lFoot", "rFoot"))
+    assert 80 < -low < 86                                                        # hip ~83 cm above toes

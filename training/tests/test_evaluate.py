@@ -1,0 +1,111 @@
+"""training/evaluate.py: metrics on known cases, the baseline, and the whole run on procedural
+fixtures with a tiny PyTorch model and its ONNX export on the real ONNX Runtime."""
+import importlib.util
+
+import numpy as np
+import pytest
+import torch
+
+from training import evaluate as ev
+from training import ort, procedural
+from training import skeleton as sk
+from training.model import ExportWrapper, ModelConfig, PoseNet
+
+
+def test_rotation_angle():
+    a = sk.rot_axis("y", np.radians(30.0))
+    b = sk.rot_axis("x", np.radians(-50.0))
+    assert ev.rotation_angle_deg(np.eye(3), a) == pytest.approx(30.0, abs=1e-6)
+    assert ev.rotation_angle_deg(b, b @ a) == pytest.approx(30.0, abs=1e-6)
+
+
+def test_drift_and_jitter_on_known_signals():
+    fps = 60.0
+    t = np.arange(0, 12, 1 / fps)
+    root = np.stack([1.0 * t, 0 * t, 0 * t], -1)          # 1 m/s along x
+    vel = np.tile([1.0, 0, 0], (len(t), 1))
+    assert np.allclose(ev.drift_errors(vel, root, fps, 5.0), 0.0, atol=1e-9)
+    still = ev.drift_errors(np.zeros_like(vel), root, fps, 5.0)
+    assert len(still) == 7 and np.allclose(still, 5.0)
+    assert len(ev.drift_errors(vel, root[:100], fps, 2.0)) == 0   # clip shorter than the window
+    cubic = np.zeros((len(t), 2, 3))
+    cubic[:, :, 1] = (t ** 3)[:, None]                  # third derivative 6 m/s^3
+    assert ev.jitter(cubic, fps) == pytest.approx(6.0, rel=1e-6)
+
+
+def test_baseline_puts_sensor_orientations_on_their_bones():
+    m = procedural.make_motion("mixed", 2.0, seed=3)
+    rng = np.random.default_rng(0)
+    clip = ev.synthesize_clip(m, rng)
+    pred = ev.predict_baseline(clip)
+    g, _ = sk.forward_kinematics(pred.local_rot, np.zeros((len(pred.local_rot), 3)), clip.offsets)
+    np.testing.assert_allclose(g[:, sk.SENSOR_JOINTS], clip.imu_orientation, atol=1e-5)
+    rest = [j for j in range(24) if j not in sk.SENSOR_JOINTS]
+    np.testing.assert_allclose(pred.local_rot[:, rest], np.broadcast_to(np.eye(3), (len(g), len(rest), 3, 3)))
+    assert not pred.root_velocity.any()
+    # Noise is realistic, not absent: the pelvis orientation differs from the truth by a little.
+    err = ev.rotation_angle_deg(clip.imu_orientation[:, 0], clip.local_rot[:, 0])
+    assert 0.05 < err.mean() < 8.0
+
+
+def _export(net, path, L, H):
+    """Tiny contract export for the test (metadata from the engine's fixture generator)."""
+    spec = importlib.util.spec_from_file_location("fx", ort.NATIVE / "tests" / "make_onnx_fixtures.py")
+    fx = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fx)
+    import onnx
+    w = ExportWrapper(net).eval()
+    args = (torch.zeros(1, 2, 6, 3, 3), torch.zeros(1, 2, 6, 3), torch.zeros(L, 1, H), torch.zeros(L, 1, H))
+    names_in = ["imu_orientation", "imu_acceleration", "state_in_h", "state_in_c"]
+    names_out = ["joint_rotations", "root_velocity", "foot_contact", "state_out_h", "state_out_c"]
+    dyn = {"imu_orientation": {0: "B", 1: "T"}, "imu_acceleration": {0: "B", 1: "T"},
+           "state_in_h": {1: "B"}, "state_in_c": {1: "B"}, "joint_rotations": {0: "B", 1: "T"},
+           "root_velocity": {0: "B", 1: "T"}, "foot_contact": {0: "B", 1: "T"},
+           "state_out_h": {1: "B"}, "state_out_c": {1: "B"}}
+    torch.onnx.export(w, args, str(path), input_names=names_in, output_names=names_out,
+                      dynamic_axes=dyn, opset_version=14)
+    model = onnx.load(str(path))
+    md = fx.metadata(state_layers=str(L), state_size=str(H), model_name="tiny-test")
+    onnx.helper.set_model_props(model, md)
+    onnx.save(model, str(path))
+
+
+def test_evaluate_end_to_end(tmp_path):
+    torch.manual_seed(0)
+    cfg = ModelConfig(embed=16, hidden=8, layers=1, head=16)
+    net = PoseNet(cfg).eval()
+    ckpt = tmp_path / "tiny.pt"
+    torch.save({"model": net.state_dict(), "config": cfg.to_dict()}, ckpt)
+    motions = [procedural.make_motion(k, 6.0, seed=i) for i, k in enumerate(["walk", "turn"])]
+    models = []
+    if ort.onnx_runtime_available():
+        _export(net, tmp_path / "tiny_fp32.onnx", cfg.layers, cfg.hidden)
+        models.append(tmp_path / "tiny_fp32.onnx")
+    out = tmp_path / "results"
+    r = ev.evaluate(motions, models, ckpt, out, seed=1, latency_frames=120, source="procedural")
+    res = r["results"]
+    assert set(res) >= {"PyTorch fp32", "baseline"}
+    for s in res.values():
+        assert 0 <= s["angle_all"] < 180 and s["pos"] >= 0 and s["drift_2s"] >= 0
+        assert np.isfinite(s["jitter"])
+    # The baseline has zero velocity: its drift is the true displacement (walk: > 1 m in 2 s).
+    assert res["baseline"]["drift_2s"] > 1.0
+    if models:
+        # ONNX Runtime reproduces PyTorch on the same inputs.
+        assert res["ONNX fp32"]["angle_all"] == pytest.approx(res["PyTorch fp32"]["angle_all"], abs=0.05)
+        assert res["ONNX fp32"]["pos"] == pytest.approx(res["PyTorch fp32"]["pos"], abs=0.05)
+        assert r["latency"]["calls"] == 120 and r["latency"]["p50_us"] > 0
+    text = (out / "evaluation.md").read_text()
+    assert "| baseline |" in text and "<= 10 deg" in text and "<= 4 M" in text
+    for png in ("per_joint_error.png", "error_over_time.png", "drift.png"):
+        assert (out / png).stat().st_size > 1000
+
+
+def test_cli_on_a_bvh_folder(tmp_path, fixture_dir):
+    d, _ = fixture_dir
+    out = tmp_path / "res"
+    rc = ev.main(["--bvh", str(d), "--no-torch", "--models", "--out", str(out), "--max-clips", "2",
+                  "--no-latency", "--no-cache"])
+    assert rc == 0
+    text = (out / "evaluation.md").read_text()
+    assert "2 clips" in text and "| baseline |" in text

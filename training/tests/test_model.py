@@ -1,0 +1,138 @@
+"""PoseNet (training/model.py): contract shapes, causality/streaming, in-graph normalisation."""
+import numpy as np
+import pytest
+import torch
+
+from training import procedural, skeleton as sk, synthesis as sy
+from training.model import (ModelConfig, PoseNet, STATE_LAYERS, STATE_SIZE, count_parameters,
+                            forward_kinematics_torch, heading_rotation, matrix_to_rot6d, rot6d_to_matrix)
+
+SMALL = ModelConfig(64, 64, 2, 64)
+
+
+def _inputs(seconds=1.0, kinds=("walk", "turn"), seed=0):
+    o, a = [], []
+    for i, k in enumerate(kinds):
+        s = sy.synthesize(procedural.make_motion(k, seconds=seconds, seed=seed + i))
+        o.append(s.imu_orientation)
+        a.append(s.imu_acceleration)
+    return torch.from_numpy(np.stack(o)), torch.from_numpy(np.stack(a))
+
+
+def _trained_like(cfg=SMALL, seed=0):
+    """Random weights with a non-negligible output layer (the real init is near the rest pose)."""
+    torch.manual_seed(seed)
+    net = PoseNet(cfg).eval()
+    with torch.no_grad():
+        net.head[-1].weight.normal_(0, 0.3)
+    return net
+
+
+def test_default_size_and_state_constants():
+    net = PoseNet()
+    n = count_parameters(net)
+    assert 1_000_000 < n <= 4_000_000
+    assert (net.state_layers, net.state_size) == (STATE_LAYERS, STATE_SIZE)
+
+
+def test_shapes_and_valid_rotations():
+    net = _trained_like()
+    o, a = _inputs()
+    rot, vel, con, (h, c) = net(o, a)
+    B, T = o.shape[:2]
+    assert rot.shape == (B, T, 24, 3, 3) and vel.shape == (B, T, 3) and con.shape == (B, T, 2)
+    assert h.shape == (SMALL.layers, B, SMALL.hidden) and c.shape == h.shape
+    eye = torch.eye(3).expand_as(rot)
+    assert torch.allclose(rot.transpose(-1, -2) @ rot, eye, atol=1e-5)
+    assert torch.allclose(torch.det(rot), torch.ones(B, T, 24), atol=1e-5)
+    assert float(con.min()) >= 0 and float(con.max()) <= 1
+
+
+def test_untrained_default_outputs_rest_pose_and_measured_pelvis():
+    torch.manual_seed(0)
+    net = PoseNet(SMALL).eval()
+    o, a = _inputs()
+    rot, vel, con, _ = net(o, a)
+    assert float((rot[:, :, 1:] - torch.eye(3)).abs().max()) < 0.05
+    assert float((rot[:, :, 0] - o[:, :, 0]).abs().max()) < 0.05
+
+
+def test_streaming_equals_whole_clip():
+    net = _trained_like()
+    o, a = _inputs(seconds=0.5)
+    with torch.no_grad():
+        whole = net(o, a)
+        state = None
+        parts = []
+        for t in range(o.shape[1]):
+            r, v, c, state = net(o[:, t:t + 1], a[:, t:t + 1], state)
+            parts.append((r, v, c))
+    for i in range(3):
+        streamed = torch.cat([p[i] for p in parts], dim=1)
+        assert torch.allclose(streamed, whole[i], atol=1e-5)
+    assert torch.allclose(state[0], whole[3][0], atol=1e-5)
+
+
+def test_causal_future_does_not_change_the_past():
+    net = _trained_like()
+    o, a = _inputs(seconds=0.5)
+    a2 = a.clone()
+    a2[:, 20:] += 5.0
+    with torch.no_grad():
+        r1 = net(o, a)[0]
+        r2 = net(o, a2)[0]
+    assert torch.allclose(r1[:, :20], r2[:, :20])
+    assert not torch.allclose(r1[:, 20:], r2[:, 20:])
+
+
+def _ry(angle):
+    return torch.from_numpy(sy._ry(angle).astype(np.float32))
+
+
+@pytest.mark.parametrize("yaw", [0.7, -2.5, 3.1])
+def test_heading_equivariance(yaw):
+    """Yawing the whole body: local joints unchanged, pelvis and velocity rotate with it."""
+    net = _trained_like()
+    o, a = _inputs()
+    ry = _ry(yaw)
+    o2 = ry @ o
+    a2 = (ry @ a.unsqueeze(-1)).squeeze(-1)
+    with torch.no_grad():
+        r1, v1, c1, _ = net(o, a)
+        r2, v2, c2, _ = net(o2, a2)
+    assert torch.allclose(r2[:, :, 1:], r1[:, :, 1:], atol=1e-4)
+    assert torch.allclose(r2[:, :, 0], ry @ r1[:, :, 0], atol=1e-4)
+    assert torch.allclose(v2, (ry @ v1.unsqueeze(-1)).squeeze(-1), atol=1e-4)
+    assert torch.allclose(c2, c1, atol=1e-4)
+
+
+def test_heading_rotation_matches_atan2_and_survives_lying_down():
+    rng = np.random.default_rng(0)
+    yaw = rng.uniform(-np.pi, np.pi, 50)
+    pitch = rng.uniform(-1.2, 1.2, 50)
+    mats = np.stack([sy._ry(y) @ sk.rot_axis("x", p) for y, p in zip(yaw, pitch)]).astype(np.float32)
+    h = heading_rotation(torch.from_numpy(mats)).numpy()
+    ref = np.stack([sy._ry(y) for y in yaw])
+    assert np.allclose(h, ref, atol=1e-4)
+    # lying on the back (forward axis straight up): finite and still a yaw rotation
+    lying = torch.from_numpy((sy._ry(0.4) @ sk.rot_axis("x", -np.pi / 2)).astype(np.float32))
+    hl = heading_rotation(lying)
+    assert torch.isfinite(hl).all()
+    assert torch.allclose(hl.T @ hl, torch.eye(3), atol=1e-5)
+    assert abs(float(hl[1, 1]) - 1.0) < 1e-6
+
+
+def test_rot6d_round_trip():
+    r = torch.from_numpy(sk.random_rotations(100, np.random.default_rng(1)).astype(np.float32))
+    assert torch.allclose(rot6d_to_matrix(matrix_to_rot6d(r)), r, atol=1e-5)
+    # Gram-Schmidt turns any (non-degenerate) 6D vector into a rotation
+    m = rot6d_to_matrix(torch.randn(100, 6))
+    assert torch.allclose(torch.det(m), torch.ones(100), atol=1e-5)
+
+
+def test_torch_fk_matches_skeleton_fk():
+    m = procedural.make_motion("mixed", seconds=1.0, seed=2)
+    g, p = sk.forward_kinematics(m.local_rot, m.root_pos, m.offsets)
+    gt, pt = forward_kinematics_torch(torch.from_numpy(m.local_rot), torch.from_numpy(m.offsets), sk.PARENTS)
+    assert np.allclose(gt.numpy(), g, atol=1e-5)
+    assert np.allclose(pt.numpy(), p - p[:, :1], atol=1e-5)

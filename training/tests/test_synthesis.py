@@ -1,0 +1,125 @@
+"""Virtual IMU synthesis (training/synthesis.py)."""
+import numpy as np
+import pytest
+
+from training import procedural, skeleton as sk, synthesis as sy
+
+
+def _static_motion(T=120, root=(0.0, 0.93, 0.0)):
+    local = np.broadcast_to(np.eye(3, dtype=np.float32), (T, 24, 3, 3)).copy()
+    rp = np.tile(np.asarray(root, np.float32), (T, 1))
+    return sk.Motion("static", 0, 60.0, local, rp, sk.DEFAULT_OFFSETS.astype(np.float32))
+
+
+def test_static_pose_has_zero_acceleration_and_planted_feet():
+    s = sy.synthesize(_static_motion())
+    assert s.imu_orientation.shape == (120, 6, 3, 3) and s.imu_acceleration.shape == (120, 6, 3)
+    assert np.allclose(s.imu_orientation, np.eye(3), atol=1e-6)
+    assert np.abs(s.imu_acceleration).max() < 1e-4
+    assert np.abs(s.root_velocity).max() < 1e-5
+    assert s.foot_contact.min() == 1.0
+    assert s.positions.shape == (120, 24, 3) and s.local_rot.shape == (120, 24, 3, 3)
+
+
+def test_constant_acceleration_is_recovered_exactly_everywhere():
+    T, a = 90, np.array([1.5, -0.5, 2.0])
+    m = _static_motion(T)
+    t = np.arange(T) / 60.0
+    m.root_pos = (m.root_pos + 0.5 * a * t[:, None] ** 2).astype(np.float32)
+    s = sy.synthesize(m)
+    # second difference of a quadratic is exact (incl. the shrunken k at the ends), float32 data
+    assert np.allclose(s.imu_acceleration, a, atol=0.05)
+    assert np.allclose(s.root_velocity[1:-1], a * t[1:-1, None], atol=1e-3)
+    assert s.foot_contact[T // 2:].max() == 0.0     # feet moving fast: no contact
+
+
+def test_rotating_pelvis_gives_centripetal_acceleration_of_the_sensor_offset():
+    T, w = 240, 2.0                                   # rad/s about Y
+    m = _static_motion(T)
+    ang = w * np.arange(T) / 60.0
+    ry = np.stack([sy._ry(x) for x in ang]).astype(np.float32)
+    for j in range(24):
+        if j == 0:
+            m.local_rot[:, 0] = ry
+    s = sy.synthesize(m)
+    off = sy.sensor_offsets(m.offsets)[0]
+    r = np.hypot(off[0], off[2])
+    acc = s.imu_acceleration[10:-10, 0]
+    mag = np.linalg.norm(acc[:, [0, 2]], axis=-1)
+    # centripetal w^2 r (the +-4 frame difference underestimates by ~sinc^2: 0.5 %)
+    assert np.allclose(mag, w * w * r, rtol=0.02)
+    # points from the sensor towards the rotation axis
+    pos = s.sensor_position[10:-10, 0]
+    inward = -(pos[:, [0, 2]] - s.root_pos[10:-10][:, [0, 2]])
+    assert np.all((acc[:, [0, 2]] * inward).sum(-1) > 0)
+
+
+def test_sensor_placement_is_on_the_stated_sides():
+    off = sy.sensor_offsets(sk.DEFAULT_OFFSETS)
+    assert off[0, 2] < 0                               # pelvis on the lower back
+    assert off[3, 2] > 0 and off[4, 2] > 0             # shins: front
+    assert np.isclose(off[3, 1], 0.4 * sk.DEFAULT_OFFSETS[7, 1])
+    assert off[1, 0] < 0 < off[2, 0]                   # wrists: up the forearm
+    assert off[5, 1] > 0.1                             # head: above the ears
+
+
+def test_augmentation_is_seeded_and_bounded():
+    m = procedural.make_motion("walk", seconds=3.0, seed=3)
+    a = sy.synthesize(m, np.random.default_rng(7), True)
+    b = sy.synthesize(m, np.random.default_rng(7), True)
+    c = sy.synthesize(m, np.random.default_rng(8), True)
+    assert np.array_equal(a.imu_acceleration, b.imu_acceleration)
+    assert not np.array_equal(a.imu_acceleration, c.imu_acceleration)
+    scale = a.offsets[4, 1] / m.offsets[4, 1]
+    assert 0.9 <= scale <= 1.1
+    clean = sy.synthesize(m)
+    nohead = sy.synthesize(m, np.random.default_rng(7), sy.Augmentation(heading=False))
+    # orientation errors: a few degrees (mounting + drift + noise), never more than ~15 deg
+    # (drop-outs hold an older sample, so compare the median)
+    ang = np.degrees(sk.angle_between_rots(nohead.imu_orientation, clean.imu_orientation))
+    assert 0.3 < np.median(ang) < 8.0
+    # local rotations below the root are untouched by augmentation
+    assert np.allclose(a.local_rot[:, 1:], clean.local_rot[:, 1:], atol=1e-6)
+
+
+def test_heading_augmentation_is_a_pure_yaw():
+    m = procedural.make_motion("turn", seconds=3.0, seed=1)
+    aug = sy.Augmentation(scale=(1.0, 1.0), mounting_deg=0, heading_drift_deg=0, orientation_noise_deg=0,
+                          acc_noise=0, acc_bias=0, drop_rate=0)
+    a = sy.synthesize(m, np.random.default_rng(2), aug)
+    c = sy.synthesize(m)
+    # same accelerations up to one rotation about Y: norms and vertical components match
+    assert np.allclose(np.linalg.norm(a.imu_acceleration, axis=-1), np.linalg.norm(c.imu_acceleration, axis=-1), atol=1e-3)
+    assert np.allclose(a.imu_acceleration[..., 1], c.imu_acceleration[..., 1], atol=1e-3)
+    assert np.allclose(a.foot_contact, c.foot_contact)
+    assert not np.allclose(a.imu_acceleration[..., 0], c.imu_acceleration[..., 0], atol=1e-2)
+
+
+def test_walk_contacts_alternate():
+    s = sy.synthesize(procedural.make_motion("walk", seconds=6.0, seed=0))
+    frac = s.foot_contact.mean(0)
+    assert np.all((frac > 0.2) & (frac < 0.9))
+    feet = s.positions[:, sk.FOOT_JOINTS]
+    v = np.linalg.norm(np.gradient(feet, axis=0) * 60, axis=-1)
+    assert v[s.foot_contact > 0].mean() < 0.2 < v[s.foot_contact == 0].mean()
+    assert np.abs(s.root_velocity[:, [0, 2]]).max() > 0.5
+
+
+def test_raw_specific_force_at_rest_and_with_mounting():
+    m = _static_motion(30)
+    mount = sk.random_rotations(6, np.random.default_rng(0))
+    raw = sy.raw_sensor_signals(m, mounting=mount)
+    f = raw["specific_force_g"]
+    assert np.allclose(np.linalg.norm(f, axis=-1), 1.0, atol=1e-6)
+    # the reading is gravity's reaction (up, model +Y) expressed in each sensor frame
+    up = np.einsum("sba,b->sa", mount, np.array([0.0, 1.0, 0.0]))
+    assert np.allclose(f[5], up, atol=1e-6)
+    assert np.abs(raw["angular_rate"]).max() < 1e-6
+
+
+def test_raw_angular_rate_of_a_yaw_spin():
+    m = _static_motion(60)
+    ang = 1.5 * np.arange(60) / 60.0
+    m.local_rot[:, 0] = np.stack([sy._ry(x) for x in ang])
+    raw = sy.raw_sensor_signals(m)
+    assert np.allclose(raw["angular_rate"][:, 0], [0.0, 1.5, 0.0], atol=1e-4)

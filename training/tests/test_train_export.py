@@ -1,0 +1,119 @@
+"""Training loop smoke test (one epoch on procedural data) and the ONNX export contract."""
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from training import export, procedural, skeleton as sk, train as tr
+from training.model import ModelConfig, PoseNet
+
+CONTRACT_KEYS = ["mocap.contract_version", "mocap.frame_rate", "mocap.sensor_order", "mocap.joint_names",
+                 "mocap.joint_parents", "mocap.rest_offsets", "mocap.state_layers", "mocap.state_size",
+                 "mocap.precision", "mocap.model_name"]
+
+
+def _motions(n, seed):
+    return [procedural.make_motion(procedural.KINDS[i % 5], seconds=3.0, seed=seed + i) for i in range(n)]
+
+
+def test_one_epoch_smoke_training_and_resume(tmp_path):
+    train_m, val_m = _motions(4, 0), _motions(1, 50)
+    cfg = tr.TrainConfig(size="tiny", batch=4, window=60, lr=3e-3, warmup=2, steps=None, budget_minutes=5,
+                         ckpt_dir=str(tmp_path / "ck"), results_dir=str(tmp_path / "res"), progress=False,
+                         smoke=True, eval_every_s=1e9)
+    frames = sum(m.num_frames for m in train_m)
+    cfg.steps = int(np.ceil(frames / (cfg.batch * cfg.window)))       # one epoch = 3 steps
+    s1 = tr.train(cfg, train_m, val_m)
+    assert s1["steps"] == cfg.steps and abs(s1["epochs"] - 1.0) < 1e-6
+    log = json.loads((tmp_path / "res" / "train_log.json").read_text())
+    assert log["history"]["val"] and np.isfinite(log["history"]["val"][-1]["val_loss"])
+    assert (tmp_path / "res" / "loss.png").stat().st_size > 1000
+    for name in ("last.pt", "best.pt"):
+        assert (tmp_path / "ck" / name).is_file()
+    # resume continues the schedule from the checkpoint; a few more steps lower the loss
+    cfg.resume, cfg.steps = True, 40
+    ck = torch.load(str(tmp_path / "ck" / "last.pt"))
+    assert ck["step"] == s1["steps"]
+    s2 = tr.train(cfg, train_m, val_m)
+    assert s2["steps"] == 40
+    hist = json.loads((tmp_path / "res" / "train_log.json").read_text())["history"]
+    assert hist["val"][-1]["val_loss"] < hist["val"][0]["val_loss"]
+    net, _ = export.load_checkpoint(tmp_path / "ck" / "best.pt")
+    assert net.config == tr.SIZES["tiny"]
+
+
+def test_stream_batcher_carries_state_and_resets_on_new_clips():
+    rng = np.random.default_rng(0)
+    b = tr.StreamBatcher(_motions(2, 0), batch=3, window=30, rng=rng)
+    first, reset = b.next()
+    assert reset.all()
+    assert first["imu_orientation"].shape == (3, 30, 6, 3, 3)
+    assert first["local_rot"].shape == (3, 30, 24, 3, 3) and first["offsets"].shape == (3, 24, 3)
+    pos = list(b.pos)
+    _, reset2 = b.next()
+    for i in range(3):   # a stream either continues its clip right after the last window or restarts
+        assert (not reset2[i] and b.pos[i] == pos[i] + 30) or reset2[i]
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    d = tmp_path_factory.mktemp("onnx")
+    net = export.untrained_model(seed=0)
+    with torch.no_grad():       # make the outputs depend visibly on the input
+        net.head[-1].weight.normal_(0, 0.05)
+    info = export.export(net, d, model_name="test", check=False)
+    return net, d, info
+
+
+def test_export_follows_the_contract(exported):
+    import onnx
+    net, d, info = exported
+    for name, prec in ((export.FP32_NAME, "fp32"), (export.FP16_NAME, "fp16")):
+        m = onnx.load(str(d / name))
+        onnx.checker.check_model(m)
+        assert max(o.version for o in m.opset_import if o.domain in ("", "ai.onnx")) >= 14
+        meta = {p.key: p.value for p in m.metadata_props}
+        assert sorted(meta) == sorted(CONTRACT_KEYS)
+        assert meta["mocap.contract_version"] == "1" and meta["mocap.precision"] == prec
+        assert meta["mocap.frame_rate"] == "60"
+        assert meta["mocap.sensor_order"] == "pelvis,left_wrist,right_wrist,left_shin,right_shin,head"
+        assert meta["mocap.joint_names"].split(",") == sk.JOINT_NAMES
+        assert [int(x) for x in meta["mocap.joint_parents"].split(",")] == sk.PARENTS
+        offs = np.array([float(x) for x in meta["mocap.rest_offsets"].split(",")]).reshape(24, 3)
+        assert np.allclose(offs, sk.DEFAULT_OFFSETS, atol=1e-6)
+        L, H = int(meta["mocap.state_layers"]), int(meta["mocap.state_size"])
+        assert (L, H) == (net.state_layers, net.state_size)
+
+        def dims(vi):
+            return [dd.dim_param or dd.dim_value for dd in vi.type.tensor_type.shape.dim]
+        ins = {i.name: i for i in m.graph.input}
+        outs = {o.name: o for o in m.graph.output}
+        assert list(ins) == export.INPUT_NAMES and list(outs) == export.OUTPUT_NAMES
+        for vi in list(ins.values()) + list(outs.values()):
+            assert vi.type.tensor_type.elem_type == onnx.TensorProto.FLOAT, vi.name
+        assert dims(ins["imu_orientation"]) == ["B", "T", 6, 3, 3]
+        assert dims(ins["imu_acceleration"]) == ["B", "T", 6, 3]
+        assert dims(ins["state_in_h"]) == [L, "B", H] and dims(outs["state_out_c"]) == [L, "B", H]
+        assert dims(outs["joint_rotations"]) == ["B", "T", 24, 3, 3]
+        assert dims(outs["root_velocity"]) == ["B", "T", 3] and dims(outs["foot_contact"]) == ["B", "T", 2]
+        types = {i.data_type for i in m.graph.initializer if i.dims and np.prod(i.dims) > 16}
+        assert types == ({onnx.TensorProto.FLOAT16} if prec == "fp16" else {onnx.TensorProto.FLOAT})
+    assert info["fp32_bytes"] <= 16 * 2 ** 20
+    assert info["fp16_bytes"] < 0.6 * info["fp32_bytes"]
+
+
+def test_onnx_runtime_matches_pytorch_and_streams(exported):
+    from training import ort
+    if not ort.onnx_runtime_available():
+        pytest.skip("ONNX Runtime not available (scripts/fetch_onnxruntime.sh)")
+    net, d, _ = exported
+    ori, acc = export.fixture_inputs(seconds=1.0)
+    rep = export.check_against_torch(net, {"fp32": d / export.FP32_NAME, "fp16": d / export.FP16_NAME},
+                                     ori, acc, stream_frames=30)
+    assert max(rep["fp32"].values()) < 1e-4, rep
+    assert max(rep["fp16"].values()) < 2e-2, rep
+    assert max(rep["stream_vs_whole_fp32"].values()) < 1e-5, rep
+    # the test model is not trivial: outputs move with the input
+    ref = export.torch_outputs(net, ori, acc)
+    assert np.ptp(ref["root_velocity"]) > 1e-3

@@ -1,0 +1,456 @@
+"""Training of PoseNet on synthesised IMU data (owner: model).
+
+    python3 -m training train [--budget-minutes 60] [--resume] [--device auto|cpu|cuda] [--smoke]
+
+Data: motions from dataset.load_motions (train split; val split for model selection), or a BVH
+folder (--bvh), or procedural motions (--smoke). IMU signals are synthesised on the fly with
+augmentation (synthesis.py; a few ms per clip, negligible next to a training step).
+
+Streams and state (truncated back-propagation through time, "stateful" training): the batch is
+B independent streams. Each stream plays one augmented clip window after window (W frames per
+step) and carries the LSTM state from one window to the next (detached), exactly as the engine
+streams; the state is zeroed only when a stream starts a new clip (half of the time at the clip
+start, otherwise at a random frame). So the network is trained both for a cold start (zero state,
+as at the start of every engine session) and for long runs with a warm state; a plain
+"zero state at every random window" scheme would only ever see states at most W frames old.
+
+Losses per frame: rotation (squared Frobenius distance of the 24 matrices: local, joint 0
+global), joint positions (mean distance of root-relative joints after forward kinematics of the
+predicted rotations on the sample's own skeleton), root velocity (MSE, m/s), root drift
+(displacement error accumulated over 1 s inside the window), foot contact (BCE on logits).
+
+Schedule: Adam, warm-up then cosine decay over a step count fixed at the start (measured speed
+x budget, or --steps) so resumed runs continue the same schedule. Seeded; fp32 on CPU and CUDA
+(TF32 disabled). Checkpoints in training/data/checkpoints (last.pt, best.pt by validation loss),
+log training/results/train_log.json, curves training/results/loss.png.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from . import skeleton as sk
+from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch
+from .synthesis import Augmentation, synthesize
+
+REPO = Path(__file__).resolve().parents[1]
+CKPT_DIR = REPO / "training" / "data" / "checkpoints"
+RESULTS_DIR = REPO / "training" / "results"
+
+SIZES = {"tiny": ModelConfig(32, 32, 1, 32), "small": ModelConfig(256, 256, 2, 256), "medium": ModelConfig(256, 384, 2, 256),
+         "large": ModelConfig(256, 512, 2, 256)}
+
+
+@dataclass
+class TrainConfig:
+    budget_minutes: float = 60.0
+    steps: int | None = None          # total optimiser steps (None: from measured speed x budget)
+    batch: int = 32
+    window: int = 120                 # frames per step per stream (2 s)
+    lr: float = 1e-3
+    warmup: int = 200
+    seed: int = 0
+    device: str = "auto"
+    size: str = "medium"
+    w_rot: float = 1.0
+    w_pos: float = 10.0
+    w_vel: float = 1.0
+    w_drift: float = 2.0
+    w_contact: float = 0.5
+    drift_frames: int = 60
+    eval_every_s: float = 180.0
+    ckpt_every_s: float = 120.0
+    val_clips: int = 40
+    val_max_frames: int = 1800
+    max_clips: int | None = None      # use only the first N training clips (quick runs)
+    train_source: str = "train"       # split name or BVH folder
+    val_source: str = "val"
+    smoke: bool = False
+    resume: bool = False
+    ckpt_dir: str = str(CKPT_DIR)
+    results_dir: str = str(RESULTS_DIR)
+    progress: bool = True
+
+
+# ------------------------------------------------------------------------------ environment
+def _blas_is_openblas() -> bool:
+    try:
+        with open("/proc/self/maps") as f:
+            return "openblas" in f.read().lower()
+    except OSError:
+        return False
+
+
+def setup_threads() -> str:
+    """OpenBLAS threads its own GEMMs: torch's intra-op threads on top oversubscribe the cores
+    (measured 2.4x slower on 2 cores). The reference BLAS is single-threaded: give torch all."""
+    if _blas_is_openblas():
+        torch.set_num_threads(1)
+        return "openblas"
+    torch.set_num_threads(os.cpu_count() or 1)
+    return "reference-or-other"
+
+
+def pick_device(name: str) -> torch.device:
+    if name == "auto":
+        name = "cuda" if torch.cuda.is_available() else "cpu"
+    dev = torch.device(name)
+    if dev.type == "cuda":
+        torch.backends.cuda.matmul.allow_tf32 = False
+        torch.backends.cudnn.allow_tf32 = False
+    return dev
+
+
+# ------------------------------------------------------------------------------ data
+class StreamBatcher:
+    """B streams, each playing an augmented clip window by window (see module docstring)."""
+
+    def __init__(self, motions, batch: int, window: int, rng: np.random.Generator,
+                 augment: Augmentation | None = Augmentation()):
+        self.motions = [m for m in motions if m.num_frames >= window + 1]
+        if not self.motions:
+            raise ValueError(f"no motion has more than {window} frames")
+        lengths = np.array([m.num_frames for m in self.motions], dtype=np.float64)
+        self.p = lengths / lengths.sum()
+        self.total_frames = int(lengths.sum())
+        self.batch, self.window, self.rng, self.augment = batch, window, rng, augment
+        self.samples = [None] * batch
+        self.pos = [0] * batch
+
+    def _new(self, i: int) -> None:
+        m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
+        s = synthesize(m, self.rng, self.augment)
+        self.samples[i] = s
+        span = s.num_frames - self.window
+        self.pos[i] = 0 if (span <= 0 or self.rng.random() < 0.5) else int(self.rng.integers(0, span + 1))
+
+    def next(self) -> tuple:
+        reset = np.zeros(self.batch, dtype=bool)
+        keys = ("imu_orientation", "imu_acceleration", "local_rot", "root_velocity", "foot_contact")
+        out = {k: [] for k in keys}
+        offsets = []
+        W = self.window
+        for i in range(self.batch):
+            if self.samples[i] is None or self.pos[i] + W > self.samples[i].num_frames:
+                self._new(i)
+                reset[i] = True
+            s, a = self.samples[i], self.pos[i]
+            for k in keys:
+                out[k].append(getattr(s, k)[a:a + W])
+            offsets.append(s.offsets)
+            self.pos[i] = a + W
+        batch = {k: torch.from_numpy(np.stack(v)) for k, v in out.items()}
+        batch["offsets"] = torch.from_numpy(np.stack(offsets))
+        return batch, torch.from_numpy(reset)
+
+
+def _procedural_motions(n: int, seconds: float, seed: int) -> list:
+    from . import procedural
+    kinds = procedural.KINDS
+    return [procedural.make_motion(kinds[i % len(kinds)], seconds=seconds, seed=seed + i,
+                                   name=f"proc_{i}") for i in range(n)]
+
+
+def load_data(cfg: TrainConfig) -> tuple:
+    if cfg.smoke:
+        return _procedural_motions(5, 4.0, cfg.seed), _procedural_motions(2, 4.0, cfg.seed + 100)
+    from . import dataset
+    train = dataset.load_motions(cfg.train_source, progress=cfg.progress)
+    if cfg.max_clips:
+        rng = np.random.default_rng(cfg.seed)
+        idx = rng.permutation(len(train))[:cfg.max_clips]
+        train = [train[i] for i in sorted(idx)]
+    val = dataset.load_motions(cfg.val_source, progress=cfg.progress)
+    return train, val
+
+
+def validation_set(motions, cfg: TrainConfig) -> list:
+    """Deterministic: evenly spaced clips, no augmentation, at most val_max_frames each."""
+    if len(motions) > cfg.val_clips:
+        idx = np.linspace(0, len(motions) - 1, cfg.val_clips).round().astype(int)
+        motions = [motions[i] for i in idx]
+    out = []
+    for m in motions:
+        s = synthesize(m)
+        n = min(s.num_frames, cfg.val_max_frames)
+        out.append({k: torch.from_numpy(getattr(s, k)[:n][None]) for k in
+                    ("imu_orientation", "imu_acceleration", "local_rot", "root_velocity", "foot_contact")}
+                   | {"offsets": torch.from_numpy(s.offsets[None])})
+    return out
+
+
+# ------------------------------------------------------------------------------ losses
+def compute_losses(net_out, batch, cfg: TrainConfig) -> dict:
+    rot, vel, logits = net_out
+    tgt = batch["local_rot"]
+    l_rot = ((rot - tgt) ** 2).sum((-1, -2)).mean()
+    off = batch["offsets"][:, None]                                   # (B,1,24,3)
+    _, p_pred = forward_kinematics_torch(rot, off, sk.PARENTS)
+    _, p_true = forward_kinematics_torch(tgt, off, sk.PARENTS)
+    l_pos = torch.sqrt(((p_pred - p_true) ** 2).sum(-1) + 1e-9).mean()
+    dv = vel - batch["root_velocity"]
+    l_vel = (dv ** 2).sum(-1).mean()
+    n = cfg.drift_frames
+    if dv.shape[1] > n:
+        e = torch.cumsum(dv, dim=1) / sk.MODEL_FPS
+        l_drift = torch.sqrt(((e[:, n:] - e[:, :-n]) ** 2).sum(-1) + 1e-9).mean()
+    else:
+        l_drift = torch.zeros((), device=dv.device)
+    l_con = F.binary_cross_entropy_with_logits(logits, batch["foot_contact"])
+    total = (cfg.w_rot * l_rot + cfg.w_pos * l_pos + cfg.w_vel * l_vel + cfg.w_drift * l_drift
+             + cfg.w_contact * l_con)
+    return {"loss": total, "rot": l_rot, "pos": l_pos, "vel": l_vel, "drift": l_drift, "contact": l_con}
+
+
+@torch.no_grad()
+def validate(net: PoseNet, val: list, cfg: TrainConfig, device) -> dict:
+    net.eval()
+    sums, n_frames = {}, 0
+    ang_sum = pos_sum = con_acc = 0.0
+    for v in val:
+        b = {k: t.to(device) for k, t in v.items()}
+        rot, vel, logits, _ = net.forward_raw(b["imu_orientation"], b["imu_acceleration"])
+        losses = compute_losses((rot, vel, logits), b, cfg)
+        T = rot.shape[1]
+        for k, x in losses.items():
+            sums[k] = sums.get(k, 0.0) + float(x) * T
+        rel = rot.transpose(-1, -2) @ b["local_rot"]
+        tr = rel[..., 0, 0] + rel[..., 1, 1] + rel[..., 2, 2]
+        ang = torch.rad2deg(torch.arccos(torch.clamp((tr - 1) / 2, -1.0, 1.0)))
+        ang_sum += float(ang[..., 1:].mean()) * T
+        off = b["offsets"][:, None]
+        _, pp = forward_kinematics_torch(rot, off, sk.PARENTS)
+        _, pt = forward_kinematics_torch(b["local_rot"], off, sk.PARENTS)
+        pos_sum += float(torch.linalg.norm(pp - pt, dim=-1).mean()) * T
+        con_acc += float(((logits > 0).float() == b["foot_contact"]).float().mean()) * T
+        n_frames += T
+    net.train()
+    out = {f"val_{k}": s / n_frames for k, s in sums.items()}
+    out.update({"val_angle_err_deg": ang_sum / n_frames, "val_pos_err_cm": 100 * pos_sum / n_frames,
+                "val_contact_acc": con_acc / n_frames, "val_frames": n_frames})
+    return out
+
+
+# ------------------------------------------------------------------------------ loop
+def _lr(step: int, total: int, cfg: TrainConfig, time_frac: float = 0.0) -> float:
+    """Warm-up, then cosine decay to 5 %. The decay follows the step count, or the elapsed
+    share of the budget when that is further along (a slower machine still anneals fully)."""
+    warm = max(1, min(cfg.warmup, total // 10))
+    if step < warm:
+        return cfg.lr * (step + 1) / warm
+    frac = min(1.0, max((step - warm) / max(1, total - warm), time_frac))
+    return cfg.lr * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * frac)))
+
+
+def load_checkpoint_file(path, device="cpu") -> dict:
+    try:   # torch >= 2.6 defaults to weights_only=True; our checkpoints hold plain python too
+        return torch.load(str(path), map_location=device, weights_only=False)
+    except TypeError:
+        return torch.load(str(path), map_location=device)
+
+
+def _save(path: Path, net, opt, step, total, cfg, history, best, rng) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
+                "total_steps": total, "config": net.config.to_dict(), "train_config": asdict(cfg),
+                "history": history, "best": best, "numpy_rng": rng.bit_generator.state,
+                "torch_rng": torch.get_rng_state()}, tmp)
+    os.replace(tmp, path)
+
+
+def plot_losses(history: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    tr, va = history.get("train", []), history.get("val", [])
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    if tr:
+        st = [r["step"] for r in tr]
+        for k in ("loss", "rot", "vel", "drift"):
+            axes[0].plot(st, [r[k] for r in tr], label=f"train {k}")
+    if va:
+        st = [r["step"] for r in va]
+        axes[0].plot(st, [r["val_loss"] for r in va], "k--o", label="val loss")
+        axes[1].plot(st, [r["val_angle_err_deg"] for r in va], "o-", label="val angle err (deg)")
+        axes[1].plot(st, [r["val_pos_err_cm"] for r in va], "s-", label="val position err (cm)")
+        axes[2].plot(st, [r["val_contact_acc"] for r in va], "o-", label="val contact accuracy")
+    axes[0].set_yscale("log")
+    for a, t in zip(axes, ("losses", "validation errors", "contact")):
+        a.set_xlabel("step"); a.set_title(t); a.legend(fontsize=8); a.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
+    blas = setup_threads()
+    if blas != "openblas" and not cfg.smoke:
+        print("train: WARNING: torch is not using OpenBLAS (Debian's reference BLAS is ~10-20x "
+              "slower here): apt-get install libopenblas0-pthread")
+    device = pick_device(cfg.device)
+    torch.manual_seed(cfg.seed)
+    rng = np.random.default_rng(cfg.seed)
+    if motions is None:
+        motions, val_motions = load_data(cfg)
+    model_cfg = SIZES[cfg.size]
+    net = PoseNet(model_cfg).to(device)
+    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+    ckpt_dir, results_dir = Path(cfg.ckpt_dir), Path(cfg.results_dir)
+    step, total, history, best = 0, cfg.steps, {"train": [], "val": []}, None
+    if cfg.resume and (ckpt_dir / "last.pt").is_file():
+        ck = load_checkpoint_file(ckpt_dir / "last.pt", device)
+        net = PoseNet(ModelConfig(**ck["config"])).to(device)
+        net.load_state_dict(ck["model"])
+        opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+        opt.load_state_dict(ck["optimizer"])
+        step, history, best = ck["step"], ck["history"], ck["best"]
+        total = cfg.steps if cfg.steps is not None else ck["total_steps"]
+        rng.bit_generator.state = ck["numpy_rng"]
+        torch.set_rng_state(ck["torch_rng"])
+        print(f"train: resumed at step {step} of {total}")
+    batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng)
+    val = validation_set(val_motions or [], cfg) if val_motions else []
+    steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
+    print(f"train: {len(batcher.motions)} clips, {batcher.total_frames} frames "
+          f"({steps_per_epoch} steps/epoch), {len(val)} val clips, device {device}, blas {blas}, "
+          f"{count_parameters(net)} parameters")
+    state = net.zero_state(cfg.batch, device)
+    t_start = time.time()
+    budget_s = cfg.budget_minutes * 60.0
+    last_eval = last_ckpt = time.time()
+    acc, acc_n, t_log = {}, 0, time.time()
+    step_times = []
+    pbar = None
+    if cfg.progress:
+        from tqdm import tqdm
+        pbar = tqdm(total=total, initial=step, desc="train", unit="step", dynamic_ncols=True)
+    net.train()
+    while True:
+        if total is not None and step >= total:
+            break
+        if time.time() - t_start > budget_s:
+            print("train: budget reached")
+            break
+        t0 = time.time()
+        batch, reset = batcher.next()
+        batch = {k: v.to(device) for k, v in batch.items()}
+        keep = (~reset).to(device).float()[None, :, None]
+        h, c = state[0] * keep, state[1] * keep
+        for g in opt.param_groups:
+            g["lr"] = _lr(step, total or 10 ** 9, cfg, (time.time() - t_start) / budget_s)
+        rot, vel, logits, (h, c) = net.forward_raw(batch["imu_orientation"], batch["imu_acceleration"], (h, c))
+        state = (h.detach(), c.detach())
+        losses = compute_losses((rot, vel, logits), batch, cfg)
+        opt.zero_grad(set_to_none=True)
+        losses["loss"].backward()
+        torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
+        opt.step()
+        step += 1
+        step_times.append(time.time() - t0)
+        for k, v in losses.items():
+            acc[k] = acc.get(k, 0.0) + float(v)
+        acc_n += 1
+        if total is None and step == 20:
+            # fix the schedule length from the measured speed (excluding the first steps)
+            per = float(np.median(step_times[5:]))
+            total = max(cfg.warmup + 1, int((budget_s - (time.time() - t_start)) / (per * 1.04)) + step)
+            print(f"train: {per * 1000:.0f} ms/step -> schedule of {total} steps "
+                  f"({total / steps_per_epoch:.1f} epochs)")
+            if pbar is not None:
+                pbar.total = total
+                pbar.refresh()
+        if pbar is not None:
+            pbar.update(1)
+            pbar.set_postfix(loss=f"{float(losses['loss']):.3f}")
+        if acc_n >= 50 or (total is not None and step >= total):
+            rec = {k: v / acc_n for k, v in acc.items()}
+            rec.update(step=step, epoch=step / steps_per_epoch, lr=opt.param_groups[0]["lr"],
+                       s_per_step=(time.time() - t_log) / acc_n, elapsed_s=time.time() - t_start)
+            history["train"].append(rec)
+            acc, acc_n, t_log = {}, 0, time.time()
+        now = time.time()
+        done = (total is not None and step >= total) or now - t_start > budget_s
+        if val and (now - last_eval > cfg.eval_every_s or done):
+            vr = validate(net, val, cfg, device)
+            vr["step"] = step
+            history["val"].append(vr)
+            last_eval = time.time()
+            msg = f"val step {step}: loss {vr['val_loss']:.4f} angle {vr['val_angle_err_deg']:.2f} deg " \
+                  f"pos {vr['val_pos_err_cm']:.2f} cm contact {vr['val_contact_acc']:.3f}"
+            (pbar.write if pbar is not None else print)(msg)
+            if best is None or vr["val_loss"] < best["val_loss"]:
+                best = dict(vr)
+                _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng)
+        if now - last_ckpt > cfg.ckpt_every_s:
+            _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng)
+            last_ckpt = time.time()
+    if pbar is not None:
+        pbar.close()
+    _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng)
+    if not val:
+        _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng)
+    st = np.array(step_times[5:] or step_times)
+    summary = {"steps": step, "total_steps": total, "epochs": step / steps_per_epoch,
+               "s_per_step_median": float(np.median(st)) if st.size else None,
+               "frames_per_s": float(cfg.batch * cfg.window / np.median(st)) if st.size else None,
+               "parameters": count_parameters(net), "device": str(device), "blas": blas,
+               "train_clips": len(batcher.motions), "train_frames": batcher.total_frames,
+               "best": best, "elapsed_s": time.time() - t_start}
+    results_dir.mkdir(parents=True, exist_ok=True)
+    log = {"summary": summary, "train_config": asdict(cfg), "model_config": net.config.to_dict(),
+           "history": history}
+    (results_dir / "train_log.json").write_text(json.dumps(log, indent=1))
+    plot_losses(history, results_dir / "loss.png")
+    print("train: " + json.dumps({k: v for k, v in summary.items() if k != "best"}))
+    return summary
+
+
+def main(args) -> int:
+    cfg = TrainConfig()
+    for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
+              "max_clips", "resume", "smoke"):
+        v = getattr(args, k, None)
+        if v is not None and v is not False:
+            setattr(cfg, k, v)
+    if getattr(args, "bvh", None):
+        cfg.train_source = args.bvh
+        cfg.val_source = getattr(args, "val_bvh", None) or args.bvh
+    if cfg.smoke:
+        if getattr(args, "size", None) is None:
+            cfg.size = "tiny"
+        cfg.batch, cfg.window = min(cfg.batch, 4), min(cfg.window, 60)
+        cfg.warmup = 5
+        cfg.eval_every_s = 1e9
+        if cfg.steps is None:
+            cfg.steps = 30
+        cfg.ckpt_dir = str(REPO / "training" / "data" / "smoke" / "checkpoints")
+        cfg.results_dir = str(REPO / "training" / "data" / "smoke" / "results")
+    train(cfg)
+    return 0
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--budget-minutes", dest="budget_minutes", type=float, default=None,
+                        help="wall-clock budget (default 60)")
+    parser.add_argument("--steps", type=int, default=None, help="total steps (default: from budget)")
+    parser.add_argument("--resume", action="store_true", help="continue from checkpoints/last.pt")
+    parser.add_argument("--device", default=None, choices=["auto", "cpu", "cuda"])
+    parser.add_argument("--smoke", action="store_true", help="tiny procedural run (seconds)")
+    parser.add_argument("--size", default=None, choices=sorted(SIZES), help="model size (default medium)")
+    parser.add_argument("--batch", type=int, default=None)
+    parser.add_argument("--window", type=int, default=None, help="frames per step (default 120)")
+    parser.add_argument("--lr", type=float, default=None)
+    parser.add_argument("--seed", type=int, default=None)
+    parser.add_argument("--max-clips", dest="max_clips", type=int, default=None)
+    parser.add_argument("--bvh", default=None, help="train on a BVH folder instead of the CMU split")
+    parser.add_argument("--val-bvh", dest="val_bvh", default=None)
