@@ -1,4 +1,4 @@
-"""python3 -m training <command>: prepare | train | export | evaluate | synth-capture.
+"""python3 -m training <command>: prepare | train | export | evaluate | synth-capture | tip-model.
 
 Each subcommand imports its module lazily, so --help works while a module is missing."""
 from __future__ import annotations
@@ -13,6 +13,7 @@ COMMANDS = {
     "export": ("export", "export ONNX fp32 + fp16 per docs/model-contract.md"),
     "evaluate": ("evaluate", "metrics of PyTorch / ONNX models on held-out clips"),
     "synth-capture": ("synth_capture", "BVH clip -> raw HiPNUC capture via mocapctl synth"),
+    "tip-model": ("tip_model", "TIP-shaped ONNX network, random weights (mocapctl bench tip)"),
 }
 
 

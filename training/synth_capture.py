@@ -1,7 +1,7 @@
 """synth-capture: a BVH clip -> a raw HiPNUC capture the engine can replay, plus the ground truth.
 
     python3 -m training synth-capture CLIP.bvh --out CAPTURE [--truth POSE.npz]
-        [--sensor-truth CSV] [--seed N] [--world nwu|enu] [--noise realistic|none]
+        [--truth-csv CSV] [--sensor-truth CSV] [--seed N] [--world nwu|enu] [--noise realistic|none]
         [--lead-in S] [--keep-trajectory]
 
 Steps: BVH -> Motion (bvh.read_bvh + retarget.to_smpl_motion, 60 Hz) -> a lead-in of S seconds
@@ -26,6 +26,13 @@ Ground truth pose file (--truth, default CAPTURE with suffix .truth.npz), numpy 
                                          t_session_start + i / fps
     prelude_s        ()  float           calibration prelude length in the capture
     clip, world, seed                    provenance
+The same pose truth as CSV (--truth-csv, default CAPTURE with suffix .truth.csv), for tools
+without numpy (`mocapctl replay CAPTURE --model M --truth CAPTURE.truth.csv` prints the pose
+accuracy of the whole byte-level pipeline): a header line, then one line per truth frame:
+    t_session, motion, root_x, root_y, root_z, then per joint (24, model order) qw, qx, qy, qz
+t_session: session time (s) of the frame (t_session_start + i / fps); motion: 0 for the lead-in
+frames, 1 for the clip's own; root position in metres, model frame; quaternions (w,x,y,z) of
+local_rot (joint 0 global, the others local to their parent). Comma separated, 7 decimals.
 The engine's own per-sensor truth (bone quaternions + accelerations per 100 Hz tick, phases) is
 written by mocapctl to --sensor-truth (default CAPTURE with suffix .sensors.csv); `mocapctl
 replay CAPTURE --truth SENSOR_CSV` compares the calibrated output against it.
@@ -143,14 +150,34 @@ def _read_motion_start(sensor_csv) -> tuple[float, float]:
     return first, start
 
 
+def write_truth_csv(path, local_rot, root_pos, fps, t_session_start, motion_start) -> None:
+    """The pose truth as CSV (format in the module docstring)."""
+    q = sk.quat_from_rot(np.asarray(local_rot, np.float64))          # (N,24,4)
+    n = q.shape[0]
+    cols = ["t_session", "motion", "root_x", "root_y", "root_z"]
+    for name in sk.JOINT_NAMES:
+        cols += [f"{name}_qw", f"{name}_qx", f"{name}_qy", f"{name}_qz"]
+    t = t_session_start + np.arange(n) / float(fps)
+    flag = (np.arange(n) >= motion_start).astype(np.int64)
+    with open(path, "w", newline="\n") as f:
+        f.write(",".join(cols) + "\n")
+        for i in range(n):
+            vals = [f"{t[i]:.7f}", str(int(flag[i]))]
+            vals += [f"{v:.7f}" for v in root_pos[i]]
+            vals += [f"{v:.7f}" for v in q[i].ravel()]
+            f.write(",".join(vals) + "\n")
+
+
 def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="nwu",
-                  noise="realistic", lead_in=1.0, keep_trajectory=False, motion=None):
+                  noise="realistic", lead_in=1.0, keep_trajectory=False, motion=None,
+                  truth_csv=None):
     """Write CAPTURE, its sensor truth CSV and the pose truth .npz; returns a dict of paths and
     facts. `motion` (a Motion) replaces reading bvh_path when given."""
     from .ort import mocapctl_path
     out = Path(out)
     truth = Path(truth) if truth else out.with_suffix(".truth.npz")
     sensor_truth = Path(sensor_truth) if sensor_truth else out.with_suffix(".sensors.csv")
+    truth_csv = Path(truth_csv) if truth_csv else out.with_suffix(".truth.csv")
     if motion is None:
         from .bvh import read_bvh
         from .retarget import to_smpl_motion
@@ -177,7 +204,8 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
              parents=np.array(sk.PARENTS), motion_start=np.int64(n_lead),
              t_session_start=np.float64(t_motion), prelude_s=np.float64(t_motion - t_first),
              clip=str(motion.name), world=world, seed=np.int64(seed))
-    return {"capture": out, "truth": truth, "sensor_truth": sensor_truth,
+    write_truth_csv(truth_csv, full.local_rot, full.root_pos, full.fps, t_motion, n_lead)
+    return {"capture": out, "truth": truth, "truth_csv": truth_csv, "sensor_truth": sensor_truth,
             "trajectory": traj if keep_trajectory else None, "frames": full.num_frames,
             "motion_start": n_lead, "t_session_start": t_motion, "prelude_s": t_motion - t_first,
             "mocapctl": r.stdout.strip()}
@@ -194,6 +222,7 @@ def add_arguments(p=None):
     p.add_argument("bvh", help="BVH clip (CMU Daz, cgspeed, or our SMPL-24 skeleton)")
     p.add_argument("--out", required=True, help="capture file to write")
     p.add_argument("--truth", help="pose truth .npz (default: CAPTURE.truth.npz)")
+    p.add_argument("--truth-csv", help="pose truth as CSV (default: CAPTURE.truth.csv)")
     p.add_argument("--sensor-truth", help="per-sensor truth CSV from mocapctl (default: CAPTURE.sensors.csv)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--world", choices=["nwu", "enu"], default="nwu")
@@ -207,11 +236,13 @@ def main(args=None):
     if args is None or isinstance(args, list):
         args = add_arguments().parse_args(args)
     info = synth_capture(args.bvh, args.out, args.truth, args.sensor_truth, args.seed, args.world,
-                         args.noise, args.lead_in, args.keep_trajectory)
+                         args.noise, args.lead_in, args.keep_trajectory,
+                         truth_csv=getattr(args, "truth_csv", None))
     print(info["mocapctl"])
     print(f"synth-capture: {info['capture']} ({info['frames']} truth frames, clip from frame "
           f"{info['motion_start']}, truth frame 0 at session t={info['t_session_start']:.3f} s "
-          f"after a {info['prelude_s']:.1f} s prelude); pose truth {info['truth']}, sensor truth "
+          f"after a {info['prelude_s']:.1f} s prelude); pose truth {info['truth']} and "
+          f"{info['truth_csv']}, sensor truth "
           f"{info['sensor_truth']}")
     return 0
 

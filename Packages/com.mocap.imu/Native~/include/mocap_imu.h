@@ -39,7 +39,7 @@ extern "C" {
 #  define MOCAP_API
 #endif
 
-#define MOCAP_API_VERSION 1
+#define MOCAP_API_VERSION 2
 #define MOCAP_SENSOR_COUNT 6
 #define MOCAP_PATH_MAX 260
 
@@ -326,6 +326,113 @@ MOCAP_API mocap_status mocap_calibration_set(mocap_session *session, const mocap
 /* Save/load a calibration as a small versioned text file. Any thread. */
 MOCAP_API mocap_status mocap_calibration_save(const mocap_calibration *cal, const char *path);
 MOCAP_API mocap_status mocap_calibration_load(const char *path, mocap_calibration *out);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Pose model and solver (docs/model-contract.md)                                              */
+/* ------------------------------------------------------------------------------------------ */
+#define MOCAP_JOINT_COUNT 24
+#define MOCAP_MAX_CHARACTERS 64
+
+typedef enum mocap_execution_provider {
+    MOCAP_PROVIDER_CPU = 0,
+    MOCAP_PROVIDER_CUDA = 1   /* needs a CUDA build of ONNX Runtime and a GPU; refused clearly otherwise */
+} mocap_execution_provider;
+
+typedef struct mocap_model_options {
+    uint32_t struct_size;
+    int32_t execution_provider;   /* mocap_execution_provider */
+    int32_t intra_op_threads;     /* 0: ONNX Runtime's default */
+    int32_t optimization_level;   /* 0 none, 1 basic, 2 extended, 3 all (default) */
+    int32_t cuda_device;
+    char onnxruntime_path[MOCAP_PATH_MAX]; /* "" = search (env MOCAP_ONNXRUNTIME_PATH, ...) */
+} mocap_model_options;
+
+/* What a model's metadata says (validated against the contract at load). */
+typedef struct mocap_model_info {
+    int32_t contract_version;
+    float frame_rate;
+    int32_t state_layers;
+    int32_t state_size;
+    int32_t joint_parents[MOCAP_JOINT_COUNT];
+    float rest_offsets[MOCAP_JOINT_COUNT][3];       /* metres, model frame; [0] = pelvis height */
+    char joint_names[MOCAP_JOINT_COUNT][32];
+    char precision[8];                              /* "fp32" / "fp16" */
+    char model_name[128];
+} mocap_model_info;
+
+typedef struct mocap_model mocap_model;
+
+/* Any thread. */
+MOCAP_API mocap_status mocap_model_options_defaults(mocap_model_options *options);
+/* Load and validate an .onnx file (a wrong model is refused with what differs; the process
+ * stays usable). options may be NULL. One thread per model. */
+MOCAP_API mocap_status mocap_model_open(const char *path, const mocap_model_options *options,
+                                        mocap_model **out);
+MOCAP_API mocap_status mocap_model_get_info(const mocap_model *model, mocap_model_info *out);
+/* Not while a solver uses it. NULL accepted. */
+MOCAP_API void mocap_model_close(mocap_model *model);
+
+/* Solver: runs the model for several characters (each a session: device + calibration) on its
+ * own thread, batched in one inference call per tick, and turns the outputs into poses with
+ * root motion and contact-based drift correction. */
+typedef struct mocap_solver_config {
+    uint32_t struct_size;
+    float contact_threshold;   /* foot_contact probability that counts as planted (0.5) */
+    float floor_height;        /* metres, model frame (0) */
+    int32_t drift_correction;  /* 1: planted feet do not slide and stay on the floor (default) */
+    int32_t require_calibration; /* 1: only calibrated frames are solved (default) */
+} mocap_solver_config;
+
+/* Pose flags. */
+enum {
+    MOCAP_POSE_CONTACT_LEFT = 1u << 0,
+    MOCAP_POSE_CONTACT_RIGHT = 1u << 1,
+    MOCAP_POSE_CORRECTED = 1u << 2,   /* drift correction moved the root this frame */
+    MOCAP_POSE_INCOMPLETE = 1u << 3   /* some sensor was held or stale in the input frame */
+};
+
+/* One solved pose of one character. Rotations are quaternions (w,x,y,z). */
+typedef struct mocap_pose {
+    uint64_t sequence;            /* per character, 0, 1, 2 ... */
+    uint64_t frame_sequence;      /* the session frame it was solved from */
+    double time_s;                /* that frame's time */
+    uint32_t character;
+    uint32_t flags;               /* MOCAP_POSE_* */
+    float joint_rotations[MOCAP_JOINT_COUNT][4]; /* joint 0 global (model frame), others local */
+    float joint_positions[MOCAP_JOINT_COUNT][3]; /* world, model frame, metres */
+    float root_position[3];
+    float root_velocity[3];       /* model output, m/s */
+    float foot_contact[2];        /* probabilities, left/right */
+    int64_t newest_receive_ns;    /* bytes that fed the input frame arrived (session clock) */
+    int64_t frame_emitted_ns;     /* the input frame was assembled */
+    int64_t pose_emitted_ns;      /* the pose was available */
+} mocap_pose;
+
+typedef struct mocap_solver mocap_solver;
+
+MOCAP_API mocap_status mocap_solver_config_defaults(mocap_solver_config *config);
+/* config may be NULL. The model must stay open while the solver lives. */
+MOCAP_API mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *config,
+                                         mocap_solver **out);
+/* Before mocap_solver_start. The solver becomes the consumer of the session's frames (do not
+ * poll/drain the session yourself afterwards); the session's output rate must equal the model's
+ * frame rate. *character receives the index (0, 1, ...). */
+MOCAP_API mocap_status mocap_solver_add_character(mocap_solver *solver, mocap_session *session,
+                                                  int32_t *character);
+/* Starts the inference thread (start the sessions yourself, before or after). */
+MOCAP_API mocap_status mocap_solver_start(mocap_solver *solver);
+/* Stops the thread and frees the solver (not the sessions or the model). NULL accepted. Close the
+ * solver before its sessions: the thread reads them until it stops. */
+MOCAP_API void mocap_solver_close(mocap_solver *solver);
+/* Newest pose of a character; MOCAP_ERR_NO_DATA when nothing new; MOCAP_ERR_END_OF_STREAM when
+ * the character's replay is finished and all its poses were taken. One consumer thread. */
+MOCAP_API mocap_status mocap_solver_poll_latest(mocap_solver *solver, int32_t character,
+                                                mocap_pose *out);
+MOCAP_API mocap_status mocap_solver_drain(mocap_solver *solver, int32_t character,
+                                          mocap_pose *out, uint32_t capacity, uint32_t *count);
+/* Clears a character's recurrent state and root motion (e.g. after a new calibration). Any
+ * thread; takes effect before its next frame. */
+MOCAP_API mocap_status mocap_solver_reset_character(mocap_solver *solver, int32_t character);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Layout description, so bindings in other languages can verify their struct mirrors.          */

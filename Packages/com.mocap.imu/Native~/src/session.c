@@ -10,6 +10,7 @@
 #include "error.h"
 #include "mocap_imu.h"
 #include "pipeline.h"
+#include "session_internal.h"
 #include "platform.h"
 #include "spsc_ring.h"
 #include "transport.h"
@@ -562,3 +563,8 @@ mocap_status mocap_calibration_load(const char *path, mocap_calibration *out)
     if (!out || !path) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "path or out is NULL");
     return calib_load(path, out);
 }
+
+/* ---------------------------------------------------------------------------------------- */
+/* Internal accessors (session_internal.h)                                                    */
+
+const mocap_session_config *session_config(const mocap_session *s) { return s ? &s->config : NULL; }

@@ -8,10 +8,21 @@
 #include <fstream>
 #include <stdexcept>
 
-std::string test_temp_dir()
+#include <unistd.h>
+
+// Outside a test (e.g. in SetUpTestSuite) there is no test name; ctest runs each test in its own
+// process, possibly in parallel, so the fallback must be unique per process or one process would
+// wipe another's files.
+static std::string current_test_name()
 {
     const auto *info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "global";
+    if (info) return std::string(info->test_suite_name()) + "." + info->name();
+    return "process-" + std::to_string(static_cast<long>(getpid()));
+}
+
+std::string test_temp_dir()
+{
+    std::string name = current_test_name();
     for (char &c : name)
         if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.') c = '_';
     std::filesystem::path dir = std::filesystem::path(MOCAP_TEST_TMPDIR) / name;
@@ -22,8 +33,7 @@ std::string test_temp_dir()
 
 std::string test_temp_path(const std::string &name)
 {
-    const auto *info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string test = info ? std::string(info->test_suite_name()) + "." + info->name() : "global";
+    std::string test = current_test_name();
     for (char &c : test)
         if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.') c = '_';
     std::filesystem::path dir = std::filesystem::path(MOCAP_TEST_TMPDIR) / test;

@@ -2,9 +2,18 @@
  * 6-sensor wireless kit actually sends (0x62 with six 0x91 blocks, 470 bytes per frame). */
 #include "bench.h"
 
+#include "capture_file.h"
 #include "error.h"
 #include "hipnuc_decoder.h"
 #include "platform.h"
+#include "solver.h"
+
+#if defined(_WIN32)
+#include <direct.h>
+#else
+#include <sys/stat.h>
+#include <unistd.h>
+#endif
 
 #include <math.h>
 #include <stdio.h>
@@ -145,4 +154,576 @@ int mocapctl_bench_decode(double seconds, double *mb_per_s)
     free(decoder);
     free(stream);
     return st;
+}
+
+/* ========================================================================================== */
+/* `mocapctl bench pipeline|latency|scaling|tip|all`: the engine with the pose model.          */
+
+#include "mocap_math.h"
+#include "onnx_generic.h"
+#include "onnx_runtime.h"
+#include "synth.h"
+
+#if defined(__linux__)
+#include <pty.h>
+#include <time.h>
+#include <unistd.h>
+#define BENCH_HAVE_PTY 1
+#endif
+
+#define POSES_CAP 512
+#define TIP_WINDOW 40
+#define TIP_IN 221
+#define TIP_OUT 131
+
+static int bench_fail(mocap_status st, const char *what)
+{
+    fprintf(stderr, "mocapctl bench: %s: %s (%s)\n", what, mocap_last_error(), mocap_status_name(st));
+    return 1;
+}
+
+/* Peak and current resident set (MB), from /proc/self/status; -1 elsewhere. */
+static void rss_mb(double *hwm, double *rss)
+{
+    *hwm = *rss = -1;
+    FILE *f = fopen("/proc/self/status", "r");
+    if (!f) return;
+    char line[256];
+    while (fgets(line, sizeof line, f)) {
+        long kb;
+        if (sscanf(line, "VmHWM: %ld kB", &kb) == 1) *hwm = kb / 1024.0;
+        if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) *rss = kb / 1024.0;
+    }
+    fclose(f);
+}
+
+static int cmp_i64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double percentile_ms(int64_t *v, size_t n, double p)
+{
+    if (!n) return NAN;
+    qsort(v, n, sizeof *v, cmp_i64);
+    size_t i = (size_t)ceil(p * (double)n);
+    if (i > 0) i--;
+    if (i >= n) i = n - 1;
+    return (double)v[i] * 1e-6;
+}
+
+typedef struct bench_ctx {
+    const mocapctl_bench_options *o;
+    char dir[200];
+    char capture[240];       /* calibration prelude + motion, for replays */
+    mocap_calibration cal;   /* from one replay of it */
+    mocap_model *model;
+    mocap_model_info info;
+    double pipeline_fps;     /* poses/s of one character (0 until measured) */
+} bench_ctx;
+
+static mocap_status make_capture(bench_ctx *b)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 11;
+    cfg.motion_s = b->o->seconds;
+    cfg.acc_noise_g = 0.01;
+    cfg.gyr_noise_dps = 0.3;
+    cfg.quat_noise_deg = 0.3;
+    cfg.acc_bias_g = 0.01;
+    cfg.still_tremor_deg = 0.2;
+    snprintf(b->capture, sizeof b->capture, "%s/bench.cap", b->dir);
+    return synth_write_capture(&cfg, synth_builtin_motion("mixed"), NULL, b->capture, NULL);
+}
+
+static mocap_status open_replay(bench_ctx *b, int with_calibration, mocap_session **out)
+{
+    mocap_session_config cfg;
+    mocap_config_defaults(&cfg);
+    cfg.source_kind = MOCAP_SOURCE_REPLAY;
+    snprintf(cfg.path, sizeof cfg.path, "%.240s", b->capture);
+    cfg.output_rate_hz = b->info.frame_rate;
+    mocap_status st = mocap_session_open(&cfg, out);
+    if (st == MOCAP_OK && with_calibration) st = mocap_calibration_set(*out, &b->cal);
+    return st;
+}
+
+/* One plain replay of the capture, calibrating on its prelude (synth's layout). */
+static mocap_status calibrate_once(bench_ctx *b)
+{
+    capture_reader *r = NULL;
+    mocap_status st = capture_reader_open(b->capture, &r);
+    if (st != MOCAP_OK) return st;
+    int64_t ns;
+    const uint8_t *data;
+    size_t len;
+    st = capture_reader_next(r, &ns, &data, &len);
+    capture_reader_close(r);
+    if (st != MOCAP_OK) return st;
+    const double t0 = (double)ns * 1e-9;
+    mocap_session *s = NULL;
+    st = open_replay(b, 0, &s);
+    if (st == MOCAP_OK) st = mocap_calibration_schedule(s, MOCAP_CALIBRATION_HEADING, t0 + 0.5, 2.0f);
+    if (st == MOCAP_OK) st = mocap_calibration_schedule(s, MOCAP_CALIBRATION_TPOSE, t0 + 5.5, 2.0f);
+    if (st == MOCAP_OK) st = mocap_session_start(s);
+    static mocap_frame frames[64];
+    while (st == MOCAP_OK) {
+        uint32_t n = 0;
+        mocap_status d = mocap_session_drain(s, frames, 64, &n);
+        if (d == MOCAP_ERR_END_OF_STREAM) break;
+        if (n == 0) mocap_sleep_ms(1);
+    }
+    if (st == MOCAP_OK) st = mocap_calibration_get(s, &b->cal);
+    if (st == MOCAP_OK && b->cal.valid_mask != (1u << MOCAP_SENSOR_COUNT) - 1)
+        st = mocap_fail(MOCAP_ERR_BAD_CALIBRATION, "bench: the capture's calibration was refused");
+    mocap_session_close(s);
+    return st;
+}
+
+/* Replays the capture for `characters` characters through one solver, as fast as possible,
+ * calibrated from the first frame. Returns poses per second per character. */
+static mocap_status run_characters(bench_ctx *b, int characters, double *per_char_fps,
+                                   double *wall_s, uint64_t *poses_total, double *model_us)
+{
+    mocap_session *sessions[MOCAP_MAX_CHARACTERS] = {0};
+    int32_t ids[MOCAP_MAX_CHARACTERS];
+    int ended[MOCAP_MAX_CHARACTERS] = {0};
+    mocap_solver *solver = NULL;
+    mocap_pose *poses = (mocap_pose *)malloc(POSES_CAP * sizeof *poses);
+    if (!poses) return mocap_fail(MOCAP_ERR_NO_MEMORY, "bench: out of memory");
+    mocap_status st = mocap_solver_open(b->model, NULL, &solver);
+    for (int c = 0; st == MOCAP_OK && c < characters; ++c) {
+        st = open_replay(b, 1, &sessions[c]);
+        if (st == MOCAP_OK) st = mocap_solver_add_character(solver, sessions[c], &ids[c]);
+    }
+    if (st == MOCAP_OK) st = mocap_solver_start(solver);
+    const int64_t t0 = mocap_monotonic_ns();
+    for (int c = 0; st == MOCAP_OK && c < characters; ++c) st = mocap_session_start(sessions[c]);
+    uint64_t total = 0;
+    int remaining = characters;
+    while (st == MOCAP_OK && remaining > 0) {
+        int got_any = 0;
+        for (int c = 0; c < characters; ++c) {
+            if (ended[c]) continue;
+            uint32_t n = 0;
+            mocap_status d = mocap_solver_drain(solver, ids[c], poses, POSES_CAP, &n);
+            total += n;
+            got_any |= n > 0;
+            if (d == MOCAP_ERR_END_OF_STREAM) {
+                ended[c] = 1;
+                remaining--;
+            } else if (d != MOCAP_OK && d != MOCAP_ERR_NO_DATA) {
+                st = d;
+            }
+        }
+        if (!got_any) mocap_sleep_ms(1);
+    }
+    const double wall = (double)(mocap_monotonic_ns() - t0) * 1e-9;
+    if (model_us && solver) {
+        solver_stats ss;
+        if (solver_get_stats(solver, -1, &ss) == MOCAP_OK && ss.ticks)
+            *model_us = (double)ss.run_ns_total / (double)ss.ticks * 1e-3;
+    }
+    if (solver) mocap_solver_close(solver);
+    for (int c = 0; c < characters; ++c) mocap_session_close(sessions[c]);
+    free(poses);
+    if (st != MOCAP_OK) return st;
+    *wall_s = wall;
+    *poses_total = total;
+    *per_char_fps = wall > 0 ? (double)total / characters / wall : 0;
+    return MOCAP_OK;
+}
+
+static int bench_pipeline(bench_ctx *b)
+{
+    double fps = 0, wall = 0, model_us = 0, hwm, rss;
+    uint64_t poses = 0;
+    mocap_status st = run_characters(b, 1, &fps, &wall, &poses, &model_us);
+    if (st != MOCAP_OK) return bench_fail(st, "pipeline");
+    b->pipeline_fps = fps;
+    rss_mb(&hwm, &rss);
+    printf("pipeline: %.0f frames/s per character end to end on replay (%llu poses of a %.0f s "
+           "capture in %.2f s: decode -> filter -> calibrate -> model -> drift; model run %.0f us "
+           "per frame)  [goal >= 2000]\n",
+           fps, (unsigned long long)poses, (double)poses / b->info.frame_rate, wall, model_us);
+    printf("memory: peak RSS %.0f MB (VmHWM; now %.0f MB) after one character, model loaded  "
+           "[goal <= 150]\n", hwm, rss);
+    return 0;
+}
+
+#if defined(BENCH_HAVE_PTY)
+typedef struct pty_writer {
+    int fd;
+    const char *capture;
+    double skip_s, seconds;
+    volatile int stop;
+    volatile int64_t done_ns; /* when the last byte was written (0 before) */
+    mocap_status status;
+} pty_writer;
+
+static void sleep_until(int64_t t_ns)
+{
+    for (;;) {
+        int64_t now = mocap_monotonic_ns();
+        if (now >= t_ns) return;
+        struct timespec ts = {(time_t)((t_ns - now) / 1000000000LL), (long)((t_ns - now) % 1000000000LL)};
+        nanosleep(&ts, NULL);
+    }
+}
+
+/* Writes the capture's records into the pty at their recorded pace (100 Hz packets), from
+ * skip_s into it, for `seconds`. */
+static void pty_writer_main(void *arg)
+{
+    pty_writer *w = (pty_writer *)arg;
+    capture_reader *r = NULL;
+    w->status = capture_reader_open(w->capture, &r);
+    if (w->status != MOCAP_OK) return;
+    int64_t first = -1, start = 0;
+    int64_t ns;
+    const uint8_t *data;
+    size_t len;
+    while (!w->stop && capture_reader_next(r, &ns, &data, &len) == MOCAP_OK) {
+        if (first < 0) first = ns;
+        double t = (double)(ns - first) * 1e-9;
+        if (t < w->skip_s) continue;
+        if (t > w->skip_s + w->seconds) break;
+        if (!start) start = mocap_monotonic_ns() - (int64_t)((t - w->skip_s) * 1e9);
+        sleep_until(start + (int64_t)((t - w->skip_s) * 1e9));
+        size_t off = 0;
+        while (off < len) {
+            ssize_t n = write(w->fd, data + off, len - off);
+            if (n <= 0) break;
+            off += (size_t)n;
+        }
+    }
+    w->done_ns = mocap_monotonic_ns();
+    capture_reader_close(r);
+}
+#endif
+
+/* Latency from byte arrival to pose: a live serial session on a pseudo-terminal fed at the
+ * capture's 100 Hz pace. */
+static int bench_latency(bench_ctx *b)
+{
+#if !defined(BENCH_HAVE_PTY)
+    printf("latency: skipped (needs a pseudo-terminal; Linux only)\n");
+    return 0;
+#else
+    int master = -1, slave = -1;
+    char name[256];
+    if (openpty(&master, &slave, name, NULL, NULL) != 0) {
+        printf("latency: skipped (openpty failed)\n");
+        return 0;
+    }
+    const double seconds = b->o->latency_seconds > 0 ? b->o->latency_seconds : 10.0;
+    mocap_session_config cfg;
+    mocap_config_defaults(&cfg);
+    cfg.source_kind = MOCAP_SOURCE_SERIAL;
+    snprintf(cfg.path, sizeof cfg.path, "%s", name);
+    cfg.output_rate_hz = b->info.frame_rate;
+    cfg.auto_reconnect = 0;
+    mocap_session *session = NULL;
+    mocap_solver *solver = NULL;
+    int32_t id = -1;
+    size_t cap = (size_t)(seconds * b->info.frame_rate * 2 + 64), n_lat = 0;
+    int64_t *lat = (int64_t *)malloc(cap * sizeof *lat);
+    mocap_pose *poses = (mocap_pose *)malloc(POSES_CAP * sizeof *poses);
+    mocap_status st = (lat && poses) ? mocap_session_open(&cfg, &session) : MOCAP_ERR_NO_MEMORY;
+    if (st == MOCAP_OK) st = mocap_calibration_set(session, &b->cal);
+    if (st == MOCAP_OK) st = mocap_solver_open(b->model, NULL, &solver);
+    if (st == MOCAP_OK) st = mocap_solver_add_character(solver, session, &id);
+    if (st == MOCAP_OK) st = mocap_solver_start(solver);
+    if (st == MOCAP_OK) st = mocap_session_start(session);
+    pty_writer w = {master, b->capture, 8.0, seconds, 0, 0, MOCAP_OK};
+    mocap_thread *thread = NULL;
+    if (st == MOCAP_OK && mocap_thread_start(&thread, pty_writer_main, &w, "bench-pty") != 0)
+        st = mocap_fail(MOCAP_ERR_STATE, "bench: cannot start the writer thread");
+    const int64_t end = mocap_monotonic_ns() + (int64_t)((seconds + 1.0) * 1e9);
+    while (st == MOCAP_OK && mocap_monotonic_ns() < end) {
+        uint32_t n = 0;
+        mocap_solver_drain(solver, id, poses, POSES_CAP, &n);
+        for (uint32_t i = 0; i < n && n_lat < cap; ++i) {
+            /* The first second is warm-up (threads, ONNX Runtime's first runs): not counted. */
+            if (poses[i].sequence < (uint64_t)b->info.frame_rate) continue;
+            /* Once the input has stopped, a live session still releases (held) frames by wall
+             * time: those measure the silence, not the engine. */
+            const int64_t done = w.done_ns;
+            if (done && poses[i].frame_emitted_ns > done) continue;
+            if (poses[i].newest_receive_ns > 0)
+                lat[n_lat++] = poses[i].pose_emitted_ns - poses[i].newest_receive_ns;
+        }
+        if (!n) mocap_sleep_ms(1);
+    }
+    w.stop = 1;
+    if (thread) mocap_thread_join(thread);
+    if (solver) mocap_solver_close(solver);
+    if (session) mocap_session_close(session);
+    close(master);
+    close(slave);
+    int rc = 0;
+    if (st != MOCAP_OK) {
+        rc = bench_fail(st, "latency");
+    } else if (n_lat < 10) {
+        printf("latency: only %zu poses came out of the pseudo-terminal session\n", n_lat);
+        rc = 1;
+    } else {
+        double p50 = percentile_ms(lat, n_lat, 0.50), p99 = percentile_ms(lat, n_lat, 0.99);
+        double mx = (double)lat[n_lat - 1] * 1e-6;
+        printf("latency: byte arrival -> pose available p50 %.2f ms, p99 %.2f ms, max %.2f ms "
+               "(%zu poses after a 1 s warm-up, live serial session on a pty fed at 100 Hz)  "
+               "[goal p99 < 5]\n",
+               p50, p99, mx, n_lat);
+    }
+    free(lat);
+    free(poses);
+    return rc;
+#endif
+}
+
+static int bench_scaling(bench_ctx *b)
+{
+    static const int counts[] = {1, 2, 4, 8, 16, 32};
+    printf("scaling (one solver, batched; replay as fast as possible):\n");
+    for (size_t i = 0; i < sizeof counts / sizeof counts[0]; ++i) {
+        int n = counts[i];
+        if (n > b->o->max_characters) break;
+        double fps = 0, wall = 0, model_us = 0, hwm, rss;
+        uint64_t poses = 0;
+        mocap_status st = run_characters(b, n, &fps, &wall, &poses, &model_us);
+        if (st != MOCAP_OK) return bench_fail(st, "scaling");
+        rss_mb(&hwm, &rss);
+        printf("  %2d characters: %7.0f frames/s per character, %7.0f in all, %.2f s, model run "
+               "%.0f us per batched call, RSS %.0f MB%s\n",
+               n, fps, fps * n, wall, model_us, rss, n == 32 ? "  [goal >= 60 per character]" : "");
+    }
+    return 0;
+}
+
+static int python_has_torch(const char *py)
+{
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "\"%s\" -c \"import torch, onnx\" >/dev/null 2>&1", py);
+    return system(cmd) == 0;
+}
+
+/* The TIP-shaped network: --tip-model, $MOCAP_TIP_MODEL, or made now with the training CLI. */
+static int tip_model_path(bench_ctx *b, char *out, size_t cap)
+{
+    const char *p = b->o->tip_model_path ? b->o->tip_model_path : getenv("MOCAP_TIP_MODEL");
+    if (p && p[0]) {
+        snprintf(out, cap, "%s", p);
+        return 0;
+    }
+    if (!b->o->repo_root) {
+        fprintf(stderr, "mocapctl bench tip: no --tip-model and the repository (training/) was not "
+                        "found to make one\n");
+        return -1;
+    }
+    const char *candidates[3] = {getenv("MOCAP_PYTHON"), "/usr/bin/python3", "python3"};
+    const char *py = NULL;
+    for (int i = 0; i < 3 && !py; ++i)
+        if (candidates[i] && candidates[i][0] && python_has_torch(candidates[i])) py = candidates[i];
+    if (!py) {
+        fprintf(stderr, "mocapctl bench tip: no python3 with torch and onnx to run `python3 -m "
+                        "training tip-model` (or pass --tip-model FILE)\n");
+        return -1;
+    }
+    snprintf(out, cap, "%s/tip_shaped.onnx", b->dir);
+    char cmd[3000];
+    snprintf(cmd, sizeof cmd, "cd \"%s\" && \"%s\" -m training tip-model --out \"%s\" >/dev/null",
+             b->o->repo_root, py, out);
+    if (system(cmd) != 0) {
+        fprintf(stderr, "mocapctl bench tip: `%s` failed\n", cmd);
+        return -1;
+    }
+    return 0;
+}
+
+static int bench_tip(bench_ctx *b)
+{
+    char path[1024];
+    if (tip_model_path(b, path, sizeof path) != 0) return 1;
+    const int threads = b->o->threads;
+    const double seconds = b->o->tip_seconds > 0 ? b->o->tip_seconds : 3.0;
+
+    /* Ours: the engine's model, one character, T = 1 per frame (as the solver runs it). */
+    ort_options oo;
+    ort_options_defaults(&oo);
+    oo.intra_op_threads = threads;
+    ort_model *ours = NULL;
+    ort_stream *stream = NULL;
+    mocap_status st = ort_model_open(b->o->model_path, &oo, &ours);
+    if (st == MOCAP_OK) st = ort_stream_create(ours, 1, 1, &stream);
+    if (st != MOCAP_OK) {
+        ort_model_close(ours);
+        return bench_fail(st, "opening our model");
+    }
+    float *ori = ort_stream_orientation(stream), *acc = ort_stream_acceleration(stream);
+    for (int s = 0; s < 6; ++s) {
+        for (int k = 0; k < 9; ++k) ori[s * 9 + k] = (k % 4 == 0) ? 1.0f : 0.0f;
+        for (int k = 0; k < 3; ++k) acc[s * 3 + k] = 0.1f * (float)(s + k);
+    }
+    size_t cap = 200000, n_ours = 0, n_tip = 0;
+    int64_t *t_ours = (int64_t *)malloc(cap * sizeof(int64_t));
+    int64_t *t_tip = (int64_t *)malloc(cap * sizeof(int64_t));
+    if (!t_ours || !t_tip) {
+        free(t_ours);
+        free(t_tip);
+        ort_stream_destroy(stream);
+        ort_model_close(ours);
+        return bench_fail(MOCAP_ERR_NO_MEMORY, "tip");
+    }
+    for (int i = 0; i < 20; ++i) ort_stream_run(stream); /* warm-up */
+    int64_t end = mocap_monotonic_ns() + (int64_t)(seconds * 1e9);
+    while (st == MOCAP_OK && n_ours < cap && mocap_monotonic_ns() < end) {
+        int64_t a = mocap_monotonic_ns();
+        st = ort_stream_run(stream);
+        t_ours[n_ours++] = mocap_monotonic_ns() - a;
+    }
+    ort_stream_destroy(stream);
+    ort_model_close(ours);
+    if (st != MOCAP_OK) {
+        free(t_ours);
+        free(t_tip);
+        return bench_fail(st, "running our model");
+    }
+
+    /* TIP's way: the whole 40-frame window re-run for every output frame, the newest frame's
+     * input holding the previous output (its 131-value state feedback). */
+    ort_generic *tip = NULL;
+    st = ort_generic_open(path, threads, &tip);
+    if (st == MOCAP_OK && (ort_generic_input_count(tip) != (size_t)TIP_WINDOW * TIP_IN ||
+                           ort_generic_output_count(tip) != (size_t)TIP_WINDOW * TIP_OUT))
+        st = mocap_fail(MOCAP_ERR_FORMAT, "%s: expected input [1,%d,%d] and output [1,%d,%d]", path,
+                        TIP_WINDOW, TIP_IN, TIP_WINDOW, TIP_OUT);
+    if (st != MOCAP_OK) {
+        ort_generic_close(tip);
+        free(t_ours);
+        free(t_tip);
+        return bench_fail(st, "opening the TIP-shaped model");
+    }
+    float *in = ort_generic_input(tip);
+    const float *out = ort_generic_output(tip);
+    mocap_rng rng;
+    mocap_rng_seed(&rng, 3);
+    for (size_t k = 0; k < (size_t)TIP_WINDOW * TIP_IN; ++k) in[k] = (float)(mocap_rng_gaussian(&rng) * 0.5);
+    for (int i = 0; i < 5 && st == MOCAP_OK; ++i) st = ort_generic_run(tip); /* warm-up */
+    end = mocap_monotonic_ns() + (int64_t)(seconds * 1e9);
+    while (st == MOCAP_OK && n_tip < cap && mocap_monotonic_ns() < end) {
+        int64_t a = mocap_monotonic_ns();
+        memmove(in, in + TIP_IN, (size_t)(TIP_WINDOW - 1) * TIP_IN * sizeof(float));
+        float *newest = in + (size_t)(TIP_WINDOW - 1) * TIP_IN;
+        for (int k = 0; k < 90; ++k) newest[k] = (float)(mocap_rng_gaussian(&rng) * 0.5);
+        memcpy(newest + 90, out + (size_t)(TIP_WINDOW - 1) * TIP_OUT, TIP_OUT * sizeof(float));
+        st = ort_generic_run(tip);
+        t_tip[n_tip++] = mocap_monotonic_ns() - a;
+    }
+    ort_generic_close(tip);
+    int rc = 0;
+    if (st != MOCAP_OK) {
+        rc = bench_fail(st, "running the TIP-shaped model");
+    } else {
+        double ours_p50 = percentile_ms(t_ours, n_ours, 0.5), tip_p50 = percentile_ms(t_tip, n_tip, 0.5);
+        double ours_mean = 0, tip_mean = 0;
+        for (size_t i = 0; i < n_ours; ++i) ours_mean += (double)t_ours[i];
+        for (size_t i = 0; i < n_tip; ++i) tip_mean += (double)t_tip[i];
+        ours_mean = ours_mean / (double)n_ours * 1e-6;
+        tip_mean = tip_mean / (double)n_tip * 1e-6;
+        printf("tip: the seed's approach (TIP-shaped net, 221 -> 256, 4 x 16-head causal "
+               "transformer, FF 1024, RNN 512 -> 131, random weights) re-run over a %d-frame "
+               "window per output frame, same ONNX Runtime %s, %d intra-op thread(s):\n",
+               TIP_WINDOW, ort_library_version(), threads);
+        printf("  TIP-shaped: %.3f ms per frame (p50 %.3f; %zu frames) = %.0f frames/s per character\n",
+               tip_mean, tip_p50, n_tip, 1e3 / tip_mean);
+        printf("  ours (model only, T = 1, recurrent state): %.3f ms per frame (p50 %.3f; %zu "
+               "frames) = %.0f frames/s\n", ours_mean, ours_p50, n_ours, 1e3 / ours_mean);
+        printf("  ratio per character: %.1fx (model vs model)", tip_mean / ours_mean);
+        if (b->pipeline_fps > 0)
+            printf(", %.1fx (our whole pipeline vs the TIP network alone)",
+                   b->pipeline_fps / (1e3 / tip_mean));
+        printf("  [goal >= 10x]\n");
+    }
+    free(t_ours);
+    free(t_tip);
+    return rc;
+}
+
+int mocapctl_bench_model(const char *which, const mocapctl_bench_options *o)
+{
+    const int all = strcmp(which, "all") == 0;
+    const int do_pipeline = all || strcmp(which, "pipeline") == 0;
+    const int do_latency = all || strcmp(which, "pipeline") == 0 || strcmp(which, "latency") == 0;
+    const int do_scaling = all || strcmp(which, "scaling") == 0;
+    const int do_tip = all || strcmp(which, "tip") == 0;
+    if (!do_pipeline && !do_latency && !do_scaling && !do_tip) {
+        fprintf(stderr, "mocapctl bench: unknown benchmark '%s' (decode, pipeline, latency, "
+                        "scaling, tip, all)\n", which);
+        return 2;
+    }
+    bench_ctx *b = (bench_ctx *)calloc(1, sizeof *b);
+    if (!b) return 1;
+    b->o = o;
+    int rc = 0;
+    const char *tmp = getenv("TMPDIR");
+    snprintf(b->dir, sizeof b->dir, "%s/mocapctl-bench-%ld", tmp && tmp[0] ? tmp : "/tmp",
+#if defined(BENCH_HAVE_PTY)
+             (long)getpid()
+#else
+             (long)mocap_monotonic_ns()
+#endif
+    );
+#if defined(_WIN32)
+    _mkdir(b->dir);
+#else
+    mkdir(b->dir, 0700);
+#endif
+    mocap_status st = mocap_model_open(o->model_path, NULL, &b->model);
+    if (st != MOCAP_OK) {
+        fprintf(stderr, "mocapctl bench: loading model %s: %s (%s)\n", o->model_path,
+                mocap_last_error(), mocap_status_name(st));
+        rc = 1;
+        goto done;
+    }
+    mocap_model_get_info(b->model, &b->info);
+    printf("bench: model %s (%s, %s), ONNX Runtime %s, %ld CPU cores online, capture: %.0f s "
+           "of motion + 8 s prelude (6 sensors at 100 Hz, realistic noise)\n",
+           o->model_path, b->info.model_name, b->info.precision, ort_library_version(),
+#if defined(_SC_NPROCESSORS_ONLN)
+           sysconf(_SC_NPROCESSORS_ONLN),
+#else
+           -1L,
+#endif
+           o->seconds);
+    st = make_capture(b);
+    if (st == MOCAP_OK) st = calibrate_once(b);
+    if (st != MOCAP_OK) {
+        rc = bench_fail(st, "preparing the capture");
+        goto done;
+    }
+    /* One character first, so the peak RSS is that of one character. */
+    if (do_pipeline && bench_pipeline(b) != 0) rc = 1;
+    if (do_latency && bench_latency(b) != 0) rc = 1;
+    if (do_scaling && bench_scaling(b) != 0) rc = 1;
+    if (do_tip) {
+        if (!do_pipeline) { /* the end-to-end ratio needs the pipeline figure */
+            double fps, wall;
+            uint64_t poses;
+            if (run_characters(b, 1, &fps, &wall, &poses, NULL) == MOCAP_OK) b->pipeline_fps = fps;
+        }
+        if (bench_tip(b) != 0) rc = 1;
+    }
+done:
+    mocap_model_close(b->model);
+    if (b->capture[0]) remove(b->capture);
+    {
+        char p[700];
+        snprintf(p, sizeof p, "%s/tip_shaped.onnx", b->dir);
+        remove(p);
+        rmdir(b->dir);
+    }
+    free(b);
+    return rc;
 }

@@ -4,9 +4,16 @@
  *                    [--trajectory FILE]   (motion from a file, see docs/synth-trajectory.md)
  *   mocapctl replay  CAPTURE [--truth CSV] [--calibration FILE | --prelude H,S,T]
  *                    [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]
- *   mocapctl live    --port DEV [--baud 460800] [--record CAPTURE] [--seconds N]
+ *   mocapctl replay  CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]
+ *                    [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]
+ *                    (with the pose model: decode -> filter -> calibrate -> model -> drift;
+ *                    used when --model, --out, --json, --pose-csv or a pose truth is given;
+ *                    default model: the shipped fp32 one)
+ *   mocapctl live    --port DEV [--baud 460800] [--record CAPTURE] [--seconds N] [--model M | --pose]
  *   mocapctl record  --port DEV --out CAPTURE [--baud 460800] [--seconds N]
  *   mocapctl bench   decode [--seconds S]
+ *   mocapctl bench   pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]
+ *                    [--tip-model F] [--max-characters N]                     (tools/bench.c)
  *   mocapctl infer   --model M.onnx --input IN --output OUT [--stream | --frames T] (tools/infer.c)
  *   mocapctl model-info M.onnx
  *   mocapctl version
@@ -17,7 +24,17 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(_WIN32)
+#include <direct.h>
+#include <io.h>
+#define isatty _isatty
+#define getcwd _getcwd
+#else
+#include <unistd.h>
+#endif
+
 #include "bench.h"
+#include "bvh_writer.h"
 #include "capture_file.h"
 #include "mocap_imu.h"
 #include "mocap_math.h"
@@ -25,6 +42,10 @@
 #include "synth.h"
 
 #define DRAIN_CAPACITY 256
+#define POSE_TRUTH_COLS (5 + MOCAP_JOINT_COUNT * 4) /* pose truth CSV columns */
+
+static int csv_first_row_columns(const char *path);
+static int cmd_replay_pose(int argc, char **argv);
 
 int mocapctl_onnx(const char *cmd, int argc, char **argv); /* tools/infer.c */
 
@@ -40,9 +61,13 @@ static int usage(void)
             "                 [--corrupt P] [--dropout P] [--trajectory FILE]\n"
             "  mocapctl replay CAPTURE [--truth CSV] [--calibration FILE | --prelude H,S,T]\n"
             "                 [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]\n"
-            "  mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S]\n"
+            "  mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
+            "                 [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
+            "  mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
             "  mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S]\n"
             "  mocapctl bench decode [--seconds S]\n"
+            "  mocapctl bench pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]\n"
+            "                 [--tip-model F] [--max-characters N]\n"
             "  mocapctl infer --model M.onnx --input IN --output OUT [--frames T | --stream] [--batch B]\n"
             "                 [--threads N] [--opt 0-3] [--provider cpu|cuda] [--repeat R]\n"
             "  mocapctl model-info M.onnx\n"
@@ -382,6 +407,11 @@ static int cmd_replay(int argc, char **argv)
     const char *prelude = arg_value(argc, argv, "--prelude");
     const char *csv_path = arg_value(argc, argv, "--csv");
     const char *rate = arg_value(argc, argv, "--rate");
+    /* With the pose model: asked for explicitly, by a pose output, or by a pose truth. */
+    if (arg_value(argc, argv, "--model") || arg_value(argc, argv, "--out") ||
+        arg_value(argc, argv, "--json") || arg_value(argc, argv, "--pose-csv") ||
+        (truth_path && csv_first_row_columns(truth_path) == POSE_TRUTH_COLS))
+        return cmd_replay_pose(argc, argv);
 
     replay_state *st = (replay_state *)calloc(1, sizeof *st);
     if (!st) return 1;
@@ -512,9 +542,728 @@ done:
 }
 
 /* ---------------------------------------------------------------------------------------- */
+/* Pose model: model path, pose truth, metrics, pose replay                                   */
+
+#define SHIPPED_MODEL "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx"
+#define POSE_DRAIN 256
+
+static int file_exists(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    fclose(f);
+    return 1;
+}
+
+/* Looks for SHIPPED_MODEL in dir and its parents (up to 8 levels). */
+static int find_upwards(const char *dir, char *out, size_t cap)
+{
+    char base[2048];
+    snprintf(base, sizeof base, "%.2000s", dir);
+    for (int level = 0; level < 8 && base[0]; ++level) {
+        snprintf(out, cap, "%s/%s", base, SHIPPED_MODEL);
+        if (file_exists(out)) return 1;
+        char *slash = strrchr(base, '/');
+        if (!slash) break;
+        if (slash == base) {
+            base[1] = 0;
+            if (level > 0 && strcmp(base, "/") == 0) break;
+        } else {
+            *slash = 0;
+        }
+    }
+    return 0;
+}
+
+/* The shipped fp32 model: $MOCAP_MODEL, else found above the executable, else above the current
+ * directory, else where the build was configured from (MOCAP_SHIPPED_MODEL). Returns 0 and fills out, or -1 with the places it looked in `out`. */
+static int default_model_path(char *out, size_t cap)
+{
+    const char *env = getenv("MOCAP_MODEL");
+    if (env && env[0]) {
+        snprintf(out, cap, "%s", env);
+        return 0;
+    }
+    char exe[4096] = "";
+#if defined(__linux__)
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n > 0) exe[n] = 0;
+    else exe[0] = 0;
+#endif
+    if (exe[0]) {
+        char *slash = strrchr(exe, '/');
+        if (slash) *slash = 0;
+        if (find_upwards(exe, out, cap)) return 0;
+    }
+    char cwd[4096];
+    if (getcwd(cwd, sizeof cwd) && find_upwards(cwd, out, cap)) return 0;
+#if defined(MOCAP_SHIPPED_MODEL)
+    if (file_exists(MOCAP_SHIPPED_MODEL)) {
+        snprintf(out, cap, "%s", MOCAP_SHIPPED_MODEL);
+        return 0;
+    }
+#endif
+    snprintf(out, cap, "%s above %s or the current directory (set --model or MOCAP_MODEL)",
+             SHIPPED_MODEL, exe[0] ? exe : "the executable");
+    return -1;
+}
+
+/* Pose truth CSV (training synth-capture): t_session, motion, root xyz, 24 x (qw qx qy qz). */
+typedef struct pose_truth_row {
+    double t;
+    int motion;
+    double root[3];
+    double q[MOCAP_JOINT_COUNT][4];
+} pose_truth_row;
+
+typedef struct pose_truth {
+    pose_truth_row *rows;
+    size_t count, cursor;
+} pose_truth;
+
+/* Columns of the first data line of a CSV (0 when none). */
+static int csv_first_row_columns(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return -1;
+    static char line[16384];
+    int cols = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (!((line[0] >= '0' && line[0] <= '9') || line[0] == '-')) continue;
+        char *p = line, *end;
+        for (;;) {
+            while (*p == ',' || *p == ' ' || *p == '\t') ++p;
+            strtod(p, &end);
+            if (end == p) break;
+            p = end;
+            ++cols;
+        }
+        break;
+    }
+    fclose(f);
+    return cols;
+}
+
+static int pose_truth_load(const char *path, pose_truth *pt)
+{
+    memset(pt, 0, sizeof *pt);
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        fprintf(stderr, "mocapctl: cannot open truth file %s\n", path);
+        return -1;
+    }
+    size_t cap = 4096;
+    pt->rows = (pose_truth_row *)malloc(cap * sizeof *pt->rows);
+    static char line[16384];
+    while (pt->rows && fgets(line, sizeof line, f)) {
+        if (!((line[0] >= '0' && line[0] <= '9') || line[0] == '-')) continue;
+        double v[POSE_TRUTH_COLS];
+        int n = 0;
+        char *p = line, *end;
+        while (n < POSE_TRUTH_COLS) {
+            while (*p == ',' || *p == ' ' || *p == '\t') ++p;
+            v[n] = strtod(p, &end);
+            if (end == p) break;
+            p = end;
+            ++n;
+        }
+        if (n != POSE_TRUTH_COLS) continue;
+        if (pt->count == cap) {
+            cap *= 2;
+            pose_truth_row *g = (pose_truth_row *)realloc(pt->rows, cap * sizeof *g);
+            if (!g) break;
+            pt->rows = g;
+        }
+        pose_truth_row *r = &pt->rows[pt->count++];
+        r->t = v[0];
+        r->motion = (int)v[1];
+        for (int k = 0; k < 3; ++k) r->root[k] = v[2 + k];
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            for (int k = 0; k < 4; ++k) r->q[j][k] = v[5 + j * 4 + k];
+            quat_normalize(r->q[j]);
+        }
+    }
+    fclose(f);
+    if (!pt->rows || pt->count < 2) {
+        fprintf(stderr, "mocapctl: pose truth %s has no usable rows (expected %d columns: "
+                "t_session, motion, root xyz, 24 x qw qx qy qz)\n", path, POSE_TRUTH_COLS);
+        free(pt->rows);
+        pt->rows = NULL;
+        return -1;
+    }
+    return 0;
+}
+
+static int pose_truth_at(pose_truth *pt, double t, pose_truth_row *out)
+{
+    if (t < pt->rows[0].t - 1e-6 || t > pt->rows[pt->count - 1].t + 1e-6) return -1;
+    while (pt->cursor + 1 < pt->count && pt->rows[pt->cursor + 1].t < t) pt->cursor++;
+    const pose_truth_row *a = &pt->rows[pt->cursor];
+    const pose_truth_row *b = &pt->rows[pt->cursor + 1 < pt->count ? pt->cursor + 1 : pt->cursor];
+    double u = b->t > a->t ? (t - a->t) / (b->t - a->t) : 0.0;
+    u = u < 0 ? 0 : (u > 1 ? 1 : u);
+    out->t = t;
+    out->motion = u < 0.5 ? a->motion : b->motion;
+    for (int k = 0; k < 3; ++k) out->root[k] = a->root[k] + u * (b->root[k] - a->root[k]);
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) quat_slerp(out->q[j], a->q[j], b->q[j], u);
+    return 0;
+}
+
+/* Global rotations and root-relative positions of a pose given local quaternions (joint 0
+ * global) on the model's skeleton. */
+static void fk(const mocap_model_info *info, const double q[MOCAP_JOINT_COUNT][4],
+               double g[MOCAP_JOINT_COUNT][4], double p[MOCAP_JOINT_COUNT][3])
+{
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+        int parent = info->joint_parents[j];
+        if (parent < 0) {
+            quat_copy(g[j], q[j]);
+            p[j][0] = p[j][1] = p[j][2] = 0.0;
+            continue;
+        }
+        quat_multiply(g[j], g[parent], q[j]);
+        double off[3] = {info->rest_offsets[j][0], info->rest_offsets[j][1], info->rest_offsets[j][2]};
+        double r[3];
+        quat_rotate(r, g[parent], off);
+        for (int k = 0; k < 3; ++k) p[j][k] = p[parent][k] + r[k];
+    }
+}
+
+/* The DIP/TransPose 15-joint subset (no pelvis, ankles, feet, wrists, hands) and SIP joints. */
+static int dip_joint(int j)
+{
+    return !(j == 0 || j == 7 || j == 8 || j == 10 || j == 11 || j == 20 || j == 21 || j == 22 || j == 23);
+}
+static const int SIP_JOINTS[4] = {1, 2, 16, 17};
+
+typedef struct pose_metrics {
+    uint64_t compared;
+    double angle_all, angle_dip, sip, pos_cm;
+    double jitter_sum, truth_jitter_sum;
+    uint64_t jitter_n;
+    double hist_p[3][MOCAP_JOINT_COUNT][3], hist_t[3][MOCAP_JOINT_COUNT][3];
+    int hist_len;
+    uint64_t last_frame_sequence;
+    /* per compared pose, for drift windows */
+    double *pred_root, *vel_root, *true_root, *times;
+    size_t cap;
+} pose_metrics;
+
+static void metrics_add(pose_metrics *m, const mocap_model_info *info, const mocap_pose *pose,
+                        const pose_truth_row *truth, double fps)
+{
+    double qp[MOCAP_JOINT_COUNT][4], gp[MOCAP_JOINT_COUNT][4], gt[MOCAP_JOINT_COUNT][4];
+    double pp[MOCAP_JOINT_COUNT][3], ptr[MOCAP_JOINT_COUNT][3];
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+        for (int k = 0; k < 4; ++k) qp[j][k] = pose->joint_rotations[j][k];
+        if (quat_normalize(qp[j]) != 0) quat_identity(qp[j]);
+    }
+    fk(info, (const double(*)[4])qp, gp, pp);
+    fk(info, truth->q, gt, ptr);
+    double all = 0, dip = 0, sip = 0, pos = 0;
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+        double a = quat_angle_deg(qp[j], truth->q[j]);
+        all += a;
+        if (dip_joint(j)) dip += a;
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k) d2 += (pp[j][k] - ptr[j][k]) * (pp[j][k] - ptr[j][k]);
+        pos += sqrt(d2);
+    }
+    for (int i = 0; i < 4; ++i) sip += quat_angle_deg(gp[SIP_JOINTS[i]], gt[SIP_JOINTS[i]]);
+    m->angle_all += all / MOCAP_JOINT_COUNT;
+    m->angle_dip += dip / 15.0;
+    m->sip += sip / 4.0;
+    m->pos_cm += 100.0 * pos / MOCAP_JOINT_COUNT;
+
+    /* Jitter: third difference of root-aligned positions over consecutive frames. */
+    if (m->compared > 0 && pose->frame_sequence != m->last_frame_sequence + 1) m->hist_len = 0;
+    m->last_frame_sequence = pose->frame_sequence;
+    if (m->hist_len == 3) {
+        double jp = 0, jt = 0;
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            double a2 = 0, b2 = 0;
+            for (int k = 0; k < 3; ++k) {
+                double dp = pp[j][k] - 3 * m->hist_p[2][j][k] + 3 * m->hist_p[1][j][k] - m->hist_p[0][j][k];
+                double dt = ptr[j][k] - 3 * m->hist_t[2][j][k] + 3 * m->hist_t[1][j][k] - m->hist_t[0][j][k];
+                a2 += dp * dp;
+                b2 += dt * dt;
+            }
+            jp += sqrt(a2);
+            jt += sqrt(b2);
+        }
+        const double f3 = fps * fps * fps;
+        m->jitter_sum += jp / MOCAP_JOINT_COUNT * f3;
+        m->truth_jitter_sum += jt / MOCAP_JOINT_COUNT * f3;
+        m->jitter_n++;
+        memmove(m->hist_p[0], m->hist_p[1], 2 * sizeof m->hist_p[0]);
+        memmove(m->hist_t[0], m->hist_t[1], 2 * sizeof m->hist_t[0]);
+        m->hist_len = 2;
+    }
+    memcpy(m->hist_p[m->hist_len], pp, sizeof pp);
+    memcpy(m->hist_t[m->hist_len], ptr, sizeof ptr);
+    m->hist_len++;
+
+    if (m->compared == m->cap) {
+        size_t cap = m->cap ? m->cap * 2 : 4096;
+        double *a = (double *)realloc(m->pred_root, cap * 3 * sizeof(double));
+        if (a) m->pred_root = a;
+        double *v = (double *)realloc(m->vel_root, cap * 3 * sizeof(double));
+        if (v) m->vel_root = v;
+        double *b = (double *)realloc(m->true_root, cap * 3 * sizeof(double));
+        if (b) m->true_root = b;
+        double *t = (double *)realloc(m->times, cap * sizeof(double));
+        if (t) m->times = t;
+        if (!a || !b || !t || !v) return;
+        m->cap = cap;
+    }
+    size_t i = m->compared;
+    for (int k = 0; k < 3; ++k) {
+        m->pred_root[i * 3 + k] = pose->root_position[k];
+        /* Integrated model velocity (no drift correction), as training/evaluate.py measures. */
+        m->vel_root[i * 3 + k] = (i ? m->vel_root[(i - 1) * 3 + k] : 0.0) +
+                                 (i ? pose->root_velocity[k] / fps : 0.0);
+        m->true_root[i * 3 + k] = truth->root[k];
+    }
+    m->times[i] = pose->time_s;
+    m->compared++;
+}
+
+/* Mean root drift over windows of w seconds starting every second: |d_pred - d_true| (m). */
+static double drift_mean(const pose_metrics *m, const double *pred, double window_s, int *count)
+{
+    double sum = 0;
+    int n = 0;
+    size_t j = 0;
+    double next_start = m->compared ? m->times[0] : 0;
+    for (size_t i = 0; i < m->compared; ++i) {
+        if (m->times[i] + 1e-9 < next_start) continue;
+        next_start = m->times[i] + 1.0;
+        if (j < i) j = i;
+        while (j < m->compared && m->times[j] < m->times[i] + window_s - 1e-6) ++j;
+        if (j >= m->compared) break;
+        double e2 = 0;
+        for (int k = 0; k < 3; ++k) {
+            double dp = pred[j * 3 + k] - pred[i * 3 + k];
+            double dt = m->true_root[j * 3 + k] - m->true_root[i * 3 + k];
+            e2 += (dp - dt) * (dp - dt);
+        }
+        sum += sqrt(e2);
+        ++n;
+    }
+    *count = n;
+    return n ? sum / n : NAN;
+}
+
+static void metrics_print(const pose_metrics *m, const char *truth_path)
+{
+    if (!m->compared) {
+        printf("  pose accuracy: no pose fell inside the truth's time range (%s)\n", truth_path);
+        return;
+    }
+    const double n = (double)m->compared;
+    printf("  pose accuracy against %s (%llu poses, %.1f s; the whole byte-level pipeline):\n",
+           truth_path, (unsigned long long)m->compared, m->times[m->compared - 1] - m->times[0]);
+    printf("    joint angle error: %.2f deg (24 joints), %.2f deg (15 DIP joints), SIP %.2f deg\n",
+           m->angle_all / n, m->angle_dip / n, m->sip / n);
+    printf("    joint position error (root-aligned): %.2f cm\n", m->pos_cm / n);
+    static const double windows[3] = {2.0, 5.0, 10.0};
+    printf("    root drift (pose root, drift-corrected):");
+    for (int w = 0; w < 3; ++w) {
+        int c = 0;
+        double d = drift_mean(m, m->pred_root, windows[w], &c);
+        printf(" %gs %.3f m%s", windows[w], d, w < 2 ? "," : "");
+        (void)c;
+    }
+    printf("\n    root drift (integrated root_velocity):");
+    for (int w = 0; w < 3; ++w) {
+        int c = 0;
+        double d = drift_mean(m, m->vel_root, windows[w], &c);
+        printf(" %gs %.3f m%s", windows[w], d, w < 2 ? "," : "");
+    }
+    printf("\n    jitter: %.2f x10^2 m/s^3 (truth %.2f)\n",
+           m->jitter_n ? m->jitter_sum / (double)m->jitter_n / 100.0 : NAN,
+           m->jitter_n ? m->truth_jitter_sum / (double)m->jitter_n / 100.0 : NAN);
+}
+
+static void write_pose_json(FILE *f, const mocap_pose *p)
+{
+    fprintf(f, "{\"sequence\":%llu,\"frame_sequence\":%llu,\"time_s\":%.6f,\"flags\":%u,"
+               "\"root_position\":[%.6f,%.6f,%.6f],\"root_velocity\":[%.6f,%.6f,%.6f],"
+               "\"foot_contact\":[%.4f,%.4f],\"joint_rotations\":[",
+            (unsigned long long)p->sequence, (unsigned long long)p->frame_sequence, p->time_s,
+            p->flags, p->root_position[0], p->root_position[1], p->root_position[2],
+            p->root_velocity[0], p->root_velocity[1], p->root_velocity[2], p->foot_contact[0],
+            p->foot_contact[1]);
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j)
+        fprintf(f, "%s[%.6f,%.6f,%.6f,%.6f]", j ? "," : "", p->joint_rotations[j][0],
+                p->joint_rotations[j][1], p->joint_rotations[j][2], p->joint_rotations[j][3]);
+    fputs("],\"joint_positions\":[", f);
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j)
+        fprintf(f, "%s[%.6f,%.6f,%.6f]", j ? "," : "", p->joint_positions[j][0],
+                p->joint_positions[j][1], p->joint_positions[j][2]);
+    fputs("]}\n", f);
+}
+
+static void write_pose_csv_header(FILE *f, const mocap_model_info *info)
+{
+    fputs("sequence,frame_sequence,time_s,flags,root_x,root_y,root_z,vel_x,vel_y,vel_z,"
+          "contact_left,contact_right", f);
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+        const char *n = info->joint_names[j];
+        fprintf(f, ",%s_qw,%s_qx,%s_qy,%s_qz", n, n, n, n);
+    }
+    fputc('\n', f);
+}
+
+static void write_pose_csv(FILE *f, const mocap_pose *p)
+{
+    fprintf(f, "%llu,%llu,%.6f,%u,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f",
+            (unsigned long long)p->sequence, (unsigned long long)p->frame_sequence, p->time_s,
+            p->flags, p->root_position[0], p->root_position[1], p->root_position[2],
+            p->root_velocity[0], p->root_velocity[1], p->root_velocity[2], p->foot_contact[0],
+            p->foot_contact[1]);
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j)
+        fprintf(f, ",%.6f,%.6f,%.6f,%.6f", p->joint_rotations[j][0], p->joint_rotations[j][1],
+                p->joint_rotations[j][2], p->joint_rotations[j][3]);
+    fputc('\n', f);
+}
+
+/* Opens the model (explicit path or the shipped one) and prints what it is. */
+static int open_model(const char *model_arg, mocap_model **model, mocap_model_info *info)
+{
+    char path[4096];
+    if (model_arg) {
+        snprintf(path, sizeof path, "%s", model_arg);
+    } else if (default_model_path(path, sizeof path) != 0) {
+        fprintf(stderr, "mocapctl: no --model given and the shipped model was not found: %s\n", path);
+        return 1;
+    }
+    mocap_status s = mocap_model_open(path, NULL, model);
+    if (s != MOCAP_OK) {
+        fprintf(stderr, "mocapctl: loading model %s: %s (%s)\n", path, mocap_last_error(),
+                mocap_status_name(s));
+        return 1;
+    }
+    mocap_model_get_info(*model, info);
+    printf("model %s: %s, %s, %.0f Hz, state %d x %d\n", path, info->model_name, info->precision,
+           info->frame_rate, info->state_layers, info->state_size);
+    return 0;
+}
+
+static long file_size(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return -1;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fclose(f);
+    return n;
+}
+
+/* Prints a calibration step's result once it has one; returns 1 when it has. */
+static int report_step_once(mocap_session *session, int step, const char *label, int *done, int *failed)
+{
+    if (*done) return 1;
+    mocap_calibration_report rep;
+    if (mocap_calibration_get_step_report(session, step, &rep) != MOCAP_OK) return 0;
+    if (rep.state != MOCAP_CALIBRATION_ACCEPTED && rep.state != MOCAP_CALIBRATION_REFUSED) return 0;
+    printf("  %s: %s\n", label, rep.state == MOCAP_CALIBRATION_ACCEPTED ? "accepted" : "REFUSED");
+    print_quality(&rep);
+    if (rep.state != MOCAP_CALIBRATION_ACCEPTED) {
+        printf("    reason: %s\n", rep.reason);
+        *failed = 1;
+    }
+    *done = 1;
+    return 1;
+}
+
+/* replay with the pose model: decode -> filter -> calibrate -> model -> drift correction. */
+static int cmd_replay_pose(int argc, char **argv)
+{
+    const char *capture = argv[0];
+    const char *model_arg = arg_value(argc, argv, "--model");
+    const char *out_path = arg_value(argc, argv, "--out");
+    const char *json_path = arg_value(argc, argv, "--json");
+    const char *csv_path = arg_value(argc, argv, "--pose-csv");
+    const char *truth_path = arg_value(argc, argv, "--truth");
+    const char *cal_path = arg_value(argc, argv, "--calibration");
+    const char *save_cal = arg_value(argc, argv, "--save-calibration");
+    const char *prelude = arg_value(argc, argv, "--prelude");
+    const char *order = arg_value(argc, argv, "--bvh-order");
+    int rc = 1;
+    mocap_model *model = NULL;
+    mocap_solver *solver = NULL;
+    mocap_session *session = NULL;
+    bvh_writer *bvh = NULL;
+    FILE *json = NULL, *csv = NULL;
+    pose_truth truth = {0};
+    pose_metrics *metrics = NULL;
+    mocap_pose *poses = NULL;
+    mocap_model_info info;
+    mocap_status s;
+
+    if (arg_value(argc, argv, "--csv"))
+        fprintf(stderr, "mocapctl: note: --csv (sensor frames) is not written with the pose model "
+                "(the solver consumes the frames); use --pose-csv\n");
+    if (truth_path) {
+        int cols = csv_first_row_columns(truth_path);
+        if (cols < 0) {
+            fprintf(stderr, "mocapctl: cannot open truth file %s\n", truth_path);
+            return 1;
+        }
+        if (cols != POSE_TRUTH_COLS) {
+            fprintf(stderr, "mocapctl: %s is not a pose truth (%d columns, expected %d: "
+                    "`python3 -m training synth-capture` writes CAPTURE.truth.csv); a sensor "
+                    "truth works without --model/--out/--json/--pose-csv\n",
+                    truth_path, cols, POSE_TRUTH_COLS);
+            return 1;
+        }
+        if (pose_truth_load(truth_path, &truth) != 0) return 1;
+    }
+    bvh_rotation_order bvh_order = BVH_ORDER_ZXY;
+    if (order && strcmp(order, "xyz") == 0) bvh_order = BVH_ORDER_XYZ;
+    else if (order && strcmp(order, "zxy") != 0) {
+        fprintf(stderr, "mocapctl: --bvh-order must be zxy or xyz\n");
+        goto done;
+    }
+    if (open_model(model_arg, &model, &info) != 0) goto done;
+    metrics = (pose_metrics *)calloc(1, sizeof *metrics);
+    poses = (mocap_pose *)malloc(POSE_DRAIN * sizeof *poses);
+    if (!metrics || !poses) goto done;
+
+    if (out_path) {
+        bvh_skeleton sk;
+        s = bvh_skeleton_from_model_info(&info, &sk);
+        if (s == MOCAP_OK) s = bvh_writer_open(out_path, &sk, 1.0 / info.frame_rate, bvh_order, &bvh);
+        if (s != MOCAP_OK) {
+            rc = fail(s, "writing BVH");
+            goto done;
+        }
+        bvh_writer_set_flush_every(bvh, (uint32_t)(info.frame_rate > 1 ? info.frame_rate : 1));
+    }
+    if (json_path && !(json = fopen(json_path, "w"))) {
+        fprintf(stderr, "mocapctl: cannot write %s\n", json_path);
+        goto done;
+    }
+    if (csv_path) {
+        if (!(csv = fopen(csv_path, "w"))) {
+            fprintf(stderr, "mocapctl: cannot write %s\n", csv_path);
+            goto done;
+        }
+        write_pose_csv_header(csv, &info);
+    }
+
+    mocap_session_config cfg;
+    mocap_config_defaults(&cfg);
+    cfg.source_kind = MOCAP_SOURCE_REPLAY;
+    snprintf(cfg.path, sizeof cfg.path, "%s", capture);
+    cfg.replay_realtime = arg_flag(argc, argv, "--realtime");
+    cfg.output_rate_hz = info.frame_rate;
+    double t0 = 0;
+    if (first_capture_time(capture, &t0) != 0) goto done;
+    s = mocap_session_open(&cfg, &session);
+    if (s != MOCAP_OK) {
+        rc = fail(s, "opening replay");
+        goto done;
+    }
+    double heading_s = 3.0, strap_s = 2.0, tpose_s = 3.0;
+    if (prelude && sscanf(prelude, "%lf,%lf,%lf", &heading_s, &strap_s, &tpose_s) != 3) {
+        fprintf(stderr, "mocapctl: --prelude wants HEADING,STRAP,TPOSE seconds\n");
+        goto done;
+    }
+    if (cal_path) {
+        mocap_calibration cal;
+        s = mocap_calibration_load(cal_path, &cal);
+        if (s == MOCAP_OK) s = mocap_calibration_set(session, &cal);
+        if (s != MOCAP_OK) {
+            rc = fail(s, "loading calibration");
+            goto done;
+        }
+    } else {
+        s = mocap_calibration_schedule(session, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
+                                       (float)(heading_s - 1.0));
+        if (s == MOCAP_OK)
+            s = mocap_calibration_schedule(session, MOCAP_CALIBRATION_TPOSE,
+                                           t0 + heading_s + strap_s + 0.5, (float)(tpose_s - 1.0));
+        if (s != MOCAP_OK) {
+            rc = fail(s, "scheduling calibration");
+            goto done;
+        }
+    }
+    int32_t character = -1;
+    s = mocap_solver_open(model, NULL, &solver);
+    if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &character);
+    if (s == MOCAP_OK) s = mocap_solver_start(solver);
+    if (s == MOCAP_OK) s = mocap_session_start(session);
+    if (s != MOCAP_OK) {
+        rc = fail(s, "starting the solver");
+        goto done;
+    }
+    printf("replay %s\n", capture);
+
+    const long total_bytes = file_size(capture);
+    const int tty = isatty(2);
+    const int64_t start_ns = mocap_monotonic_ns();
+    int64_t last_progress = start_ns;
+    int last_decile = 0, progress_shown = 0;
+    int heading_done = cal_path != NULL, tpose_done = cal_path != NULL, cal_failed = 0;
+    uint64_t written = 0, in_motion = 0;
+    double first_t = 0, last_t = 0;
+    for (;;) {
+        uint32_t n = 0;
+        s = mocap_solver_drain(solver, character, poses, POSE_DRAIN, &n);
+        for (uint32_t i = 0; i < n; ++i) {
+            const mocap_pose *p = &poses[i];
+            if (written == 0) first_t = p->time_s;
+            last_t = p->time_s;
+            written++;
+            if (bvh && bvh_writer_append_pose(bvh, p) != MOCAP_OK) {
+                rc = fail(MOCAP_ERR_IO, "writing BVH");
+                goto done;
+            }
+            if (json) write_pose_json(json, p);
+            if (csv) write_pose_csv(csv, p);
+            pose_truth_row tr;
+            if (truth.rows && pose_truth_at(&truth, p->time_s, &tr) == 0) {
+                metrics_add(metrics, &info, p, &tr, info.frame_rate);
+                in_motion += tr.motion != 0;
+            }
+        }
+        report_step_once(session, MOCAP_CALIBRATION_HEADING, "heading step", &heading_done, &cal_failed);
+        if (heading_done) report_step_once(session, MOCAP_CALIBRATION_TPOSE, "T-pose step", &tpose_done, &cal_failed);
+        if (s == MOCAP_ERR_END_OF_STREAM || interrupted) break;
+        if (s != MOCAP_OK && s != MOCAP_ERR_NO_DATA) {
+            rc = fail(s, "solving");
+            goto done;
+        }
+        int64_t now = mocap_monotonic_ns();
+        if (total_bytes > 0 && now - last_progress > 500000000LL && now - start_ns > 1000000000LL) {
+            mocap_session_stats stats;
+            mocap_session_get_stats(session, &stats);
+            double frac = (double)stats.bytes_received / (double)total_bytes;
+            if (frac > 1) frac = 1;
+            int decile = (int)(frac * 10);
+            if (tty) {
+                fprintf(stderr, "\r  %3.0f%% of %s, %llu poses ", 100 * frac, capture,
+                        (unsigned long long)written);
+                progress_shown = 1;
+            } else if (decile > last_decile) {
+                fprintf(stderr, "  %d%% of %s, %llu poses\n", decile * 10, capture,
+                        (unsigned long long)written);
+                last_decile = decile;
+            }
+            last_progress = now;
+        }
+        if (n == 0) mocap_sleep_ms(1);
+    }
+    if (progress_shown) fprintf(stderr, "\r%60s\r", "");
+    if (!heading_done || !tpose_done)
+        printf("  calibration: the capture ended before %s finished\n",
+               !heading_done ? "the heading step" : "the T-pose step");
+    const double wall = (double)(mocap_monotonic_ns() - start_ns) * 1e-9;
+
+    if (save_cal) {
+        mocap_calibration cal;
+        mocap_calibration_get(session, &cal);
+        s = mocap_calibration_save(&cal, save_cal);
+        if (s != MOCAP_OK) {
+            rc = fail(s, "saving calibration");
+            goto done;
+        }
+        printf("  calibration saved to %s\n", save_cal);
+    }
+    mocap_session_stats stats;
+    mocap_session_get_stats(session, &stats);
+    printf("  %llu bytes, %llu HiPNUC frames, %llu CRC failures, %llu samples (%llu rejected), "
+           "%llu output frames\n",
+           (unsigned long long)stats.bytes_received, (unsigned long long)stats.frames_decoded,
+           (unsigned long long)stats.crc_failures, (unsigned long long)stats.samples_decoded,
+           (unsigned long long)stats.samples_rejected, (unsigned long long)stats.frames_emitted);
+    printf("  %llu poses at %.0f Hz over %.2f s (%.0f poses/s of wall time)\n",
+           (unsigned long long)written, info.frame_rate, written ? last_t - first_t : 0.0,
+           wall > 0 ? (double)written / wall : 0.0);
+    if (bvh) {
+        s = bvh_writer_close(bvh);
+        bvh = NULL;
+        if (s != MOCAP_OK) {
+            rc = fail(s, "writing BVH");
+            goto done;
+        }
+        printf("  wrote %s (BVH, SMPL-24 skeleton, metres, %s Euler, %llu frames at %.0f Hz)\n",
+               out_path, bvh_order == BVH_ORDER_XYZ ? "XYZ" : "ZXY", (unsigned long long)written,
+               info.frame_rate);
+    }
+    if (json) printf("  wrote %s (one JSON object per pose)\n", json_path);
+    if (csv) printf("  wrote %s (one CSV line per pose)\n", csv_path);
+    if (truth.rows) metrics_print(metrics, truth_path);
+    (void)in_motion;
+    rc = (cal_failed || written == 0) ? 1 : 0;
+    if (written == 0) fprintf(stderr, "mocapctl: no pose was solved (calibration %s)\n",
+                              cal_failed ? "refused" : "missing");
+done:
+    /* Solver first (it consumes the session), then the session, then the model. */
+    if (solver) mocap_solver_close(solver);
+    if (session) mocap_session_close(session);
+    if (model) mocap_model_close(model);
+    if (bvh) bvh_writer_close(bvh);
+    if (json) fclose(json);
+    if (csv) fclose(csv);
+    if (metrics) {
+        free(metrics->pred_root);
+        free(metrics->vel_root);
+        free(metrics->true_root);
+        free(metrics->times);
+        free(metrics);
+    }
+    free(poses);
+    free(truth.rows);
+    return rc;
+}
+
+/* `mocapctl bench pipeline|latency|scaling|tip|all` (tools/bench.c). */
+static int cmd_bench_model(const char *which, int argc, char **argv)
+{
+    static char model[4096], shipped[4096], root[4096];
+    const char *model_arg = arg_value(argc, argv, "--model");
+    int have_shipped = default_model_path(shipped, sizeof shipped) == 0;
+    if (model_arg) {
+        snprintf(model, sizeof model, "%s", model_arg);
+    } else if (have_shipped) {
+        snprintf(model, sizeof model, "%s", shipped);
+    } else {
+        fprintf(stderr, "mocapctl: no --model given and the shipped model was not found: %s\n", shipped);
+        return 1;
+    }
+    mocapctl_bench_options o;
+    memset(&o, 0, sizeof o);
+    o.model_path = model;
+    o.tip_model_path = arg_value(argc, argv, "--tip-model");
+    if (have_shipped) {
+        snprintf(root, sizeof root, "%s", shipped);
+        char *cut = strstr(root, "/Packages/com.mocap.imu/");
+        if (cut) {
+            *cut = 0;
+            o.repo_root = root;
+        }
+    }
+    const char *v;
+    o.seconds = (v = arg_value(argc, argv, "--seconds")) ? atof(v) : 30.0;
+    o.latency_seconds = (v = arg_value(argc, argv, "--latency-seconds")) ? atof(v) : 10.0;
+    o.tip_seconds = (v = arg_value(argc, argv, "--tip-seconds")) ? atof(v) : 3.0;
+    o.threads = (v = arg_value(argc, argv, "--threads")) ? atoi(v) : 1;
+    o.max_characters = (v = arg_value(argc, argv, "--max-characters")) ? atoi(v) : 32;
+    if (!(o.seconds > 0) || o.max_characters < 1 || o.max_characters > MOCAP_MAX_CHARACTERS) {
+        fprintf(stderr, "mocapctl bench: --seconds > 0 and --max-characters 1..%d\n", MOCAP_MAX_CHARACTERS);
+        return 2;
+    }
+    return mocapctl_bench_model(which, &o);
+}
+
+/* ---------------------------------------------------------------------------------------- */
 /* live / record                                                                               */
 
-static int open_live(int argc, char **argv, const char *record_path, mocap_session **out)
+static int open_live(int argc, char **argv, const char *record_path, float rate_hz,
+                     mocap_session **out)
 {
     const char *port = arg_value(argc, argv, "--port");
     if (!port) return usage();
@@ -525,6 +1274,7 @@ static int open_live(int argc, char **argv, const char *record_path, mocap_sessi
     snprintf(cfg.path, sizeof cfg.path, "%s", port);
     if (baud) cfg.baud = (uint32_t)strtoul(baud, NULL, 10);
     if (record_path) snprintf(cfg.capture_path, sizeof cfg.capture_path, "%s", record_path);
+    if (rate_hz > 0) cfg.output_rate_hz = rate_hz;
     mocap_status s = mocap_session_open(&cfg, out);
     if (s != MOCAP_OK) return fail(s, "opening the receiver");
     s = mocap_session_start(*out);
@@ -568,6 +1318,66 @@ static void show_status_until(mocap_session *session, double limit_s)
     printf("\n");
 }
 
+/* After calibration with --model: the solver consumes the session; prints the pose status
+ * (fps, root height and position, foot contacts, flags) ten times a second. */
+static int show_poses_until(mocap_session *session, mocap_model *model, double limit_s)
+{
+    mocap_solver *solver = NULL;
+    int32_t id = -1;
+    mocap_status s = mocap_solver_open(model, NULL, &solver);
+    if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &id);
+    if (s == MOCAP_OK) s = mocap_solver_start(solver);
+    if (s != MOCAP_OK) {
+        mocap_solver_close(solver);
+        return fail(s, "starting the solver");
+    }
+    static mocap_pose poses[64];
+    mocap_pose last;
+    int have = 0;
+    uint64_t count = 0, window_count = 0;
+    int64_t start = mocap_monotonic_ns(), window_start = start, last_print = 0;
+    double fps = 0;
+    while (!interrupted && (double)(mocap_monotonic_ns() - start) * 1e-9 < limit_s) {
+        uint32_t n = 0;
+        mocap_solver_drain(solver, id, poses, 64, &n);
+        if (n) {
+            last = poses[n - 1];
+            have = 1;
+            count += n;
+            window_count += n;
+        }
+        int64_t now = mocap_monotonic_ns();
+        if (now - window_start >= 1000000000LL) {
+            fps = (double)window_count / ((double)(now - window_start) * 1e-9);
+            window_count = 0;
+            window_start = now;
+        }
+        if (now - last_print < 100000000LL) {
+            mocap_sleep_ms(16);
+            continue;
+        }
+        last_print = now;
+        mocap_session_stats stats;
+        mocap_session_get_stats(session, &stats);
+        if (have) {
+            printf("\rpose %-7llu %5.1f fps  root (%6.2f %5.2f %6.2f) m  feet %c%c  %s%s   ",
+                   (unsigned long long)count, fps, last.root_position[0], last.root_position[1],
+                   last.root_position[2], (last.flags & MOCAP_POSE_CONTACT_LEFT) ? 'L' : '.',
+                   (last.flags & MOCAP_POSE_CONTACT_RIGHT) ? 'R' : '.',
+                   (last.flags & MOCAP_POSE_INCOMPLETE) ? "incomplete " : "",
+                   stats.connection_state == MOCAP_CONNECTION_DISCONNECTED ? stats.last_error : "");
+        } else {
+            printf("\rwaiting for poses (%llu frames received)   ",
+                   (unsigned long long)stats.frames_emitted);
+        }
+        fflush(stdout);
+        mocap_sleep_ms(16);
+    }
+    printf("\n");
+    mocap_solver_close(solver);
+    return 0;
+}
+
 static int guided_step(mocap_session *session, int step, const char *instruction, float seconds)
 {
     printf("\n%s\n", instruction);
@@ -602,7 +1412,15 @@ static int cmd_live(int argc, char **argv)
     mocap_session *session = NULL;
     const char *record = arg_value(argc, argv, "--record");
     const char *seconds = arg_value(argc, argv, "--seconds");
-    if (open_live(argc, argv, record, &session) != 0) return 1;
+    const int with_model = arg_value(argc, argv, "--model") != NULL || arg_flag(argc, argv, "--pose");
+    mocap_model *model = NULL;
+    mocap_model_info info;
+    /* The model first: the session's output rate is the model's frame rate. */
+    if (with_model && open_model(arg_value(argc, argv, "--model"), &model, &info) != 0) return 1;
+    if (open_live(argc, argv, record, model ? info.frame_rate : 0.0f, &session) != 0) {
+        mocap_model_close(model);
+        return 1;
+    }
     double limit = seconds ? atof(seconds) : 1e30;
     int rc = 0;
     for (int attempt = 0; attempt < 3; ++attempt) {
@@ -618,8 +1436,13 @@ static int cmd_live(int argc, char **argv)
         if (rc == 0 || interrupted) break;
     }
     if (rc == 0) printf("\nCalibrated. Streaming; Ctrl-C to stop.\n");
-    show_status_until(session, limit);
+    if (rc == 0 && model) {
+        rc = show_poses_until(session, model, limit);
+    } else {
+        show_status_until(session, limit);
+    }
     mocap_session_close(session);
+    mocap_model_close(model);
     return rc;
 }
 
@@ -629,7 +1452,7 @@ static int cmd_record(int argc, char **argv)
     const char *seconds = arg_value(argc, argv, "--seconds");
     if (!out) return usage();
     mocap_session *session = NULL;
-    if (open_live(argc, argv, out, &session) != 0) return 1;
+    if (open_live(argc, argv, out, 0.0f, &session) != 0) return 1;
     double limit = seconds ? atof(seconds) : 1e30;
     printf("recording to %s; Ctrl-C to stop\n", out);
     show_status_until(session, limit);
@@ -657,10 +1480,13 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "record") == 0) return cmd_record(argc - 2, argv + 2);
     if (strcmp(cmd, "infer") == 0 || strcmp(cmd, "model-info") == 0) return mocapctl_onnx(cmd, argc - 2, argv + 2);
     if (strcmp(cmd, "bench") == 0) {
-        if (argc < 3 || strcmp(argv[2], "decode") != 0) return usage();
-        const char *seconds = arg_value(argc - 3, argv + 3, "--seconds");
-        double mbps = 0;
-        return mocapctl_bench_decode(seconds ? atof(seconds) : 3.0, &mbps);
+        if (argc < 3) return usage();
+        if (strcmp(argv[2], "decode") == 0) {
+            const char *seconds = arg_value(argc - 3, argv + 3, "--seconds");
+            double mbps = 0;
+            return mocapctl_bench_decode(seconds ? atof(seconds) : 3.0, &mbps);
+        }
+        return cmd_bench_model(argv[2], argc - 3, argv + 3);
     }
     if (strcmp(cmd, "version") == 0) {
         printf("mocapctl %s (API %d)\n", mocap_version_string(), mocap_api_version());

@@ -1,0 +1,628 @@
+/* The pose solver: one inference thread, several characters batched per tick. See solver.h for
+ * the scheduling and mocap_imu.h for the public contract. Root motion: drift.h. FK:
+ * skeleton_fk.h. */
+#include "solver.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "drift.h"
+#include "error.h"
+#include "mocap_math.h"
+#include "platform.h"
+#include "session_internal.h"
+#include "skeleton_fk.h"
+#include "spsc_ring.h"
+
+#define POSE_RING_POSES 1024   /* 17 s at 60 Hz for a consumer that drains rarely */
+#define FRAME_BUFFER 16        /* frames taken from a session per drain call */
+#define ABSENT_PERIODS 3       /* no frame for this many periods: not waited for */
+
+typedef struct character {
+    mocap_session *session;
+    int replay;                 /* frames are stamped with data time, not the wall clock */
+    int replay_fast;            /* back-pressure instead of dropping */
+    spsc_ring poses;
+    float *state_h, *state_c;   /* [L][H] each: this character's recurrent state */
+
+    /* Solver thread only. */
+    mocap_frame buf[FRAME_BUFFER];
+    uint32_t buf_count, buf_pos;
+    int64_t buf_taken_ns;       /* when buf left the session */
+    const mocap_frame *pending; /* next frame to solve (points into buf) */
+    int session_ended;
+    int64_t last_frame_ns;      /* monotonic time a frame last became pending (0: never) */
+    drift_state drift;
+    uint64_t pose_sequence;
+    int have_last_pose;
+    mocap_pose last_pose;
+
+    mocap_atomic_int ended;     /* the session ended and every pose was pushed */
+    mocap_atomic_int reset_requested;
+    mocap_atomic_u64 frames_solved, frames_uncalibrated, frames_nonfinite, outputs_nonfinite,
+        poses_dropped, run_failures;
+
+    /* Consumer only. */
+    mocap_pose latest;
+} character;
+
+struct mocap_solver {
+    mocap_model *model;
+    mocap_model_info info;
+    mocap_solver_config config;
+    skeleton sk;
+    drift_params drift;
+    int L, H;
+    int64_t period_ns;
+    character *chars[MOCAP_MAX_CHARACTERS];
+    int count;
+    ort_stream *streams[MOCAP_MAX_CHARACTERS]; /* [B - 1] */
+    int prepared, started;
+    mocap_thread *thread;
+    mocap_atomic_int stop;
+    solver_input_tap tap;
+    void *tap_user;
+
+    /* Scratch of one tick (solver thread). */
+    int32_t tick_chars[MOCAP_MAX_CHARACTERS];
+    const mocap_frame *tick_frames[MOCAP_MAX_CHARACTERS];
+    int64_t tick_taken[MOCAP_MAX_CHARACTERS];
+    int batch_index[MOCAP_MAX_CHARACTERS];     /* tick entry of batch slot b */
+    float in_ori[MOCAP_MAX_CHARACTERS][54];
+    float in_acc[MOCAP_MAX_CHARACTERS][18];
+    mocap_pose pose;
+
+    mocap_atomic_u64 ticks, batched_calls, max_batch, solve_ns_total, solve_ns_max, run_ns_total;
+};
+
+/* ---------------------------------------------------------------------------------------- */
+/* Inputs                                                                                      */
+
+int solver_frame_input(const mocap_frame *f, float orientation[54], float acceleration[18])
+{
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        const mocap_sensor_frame *sf = &f->sensors[s];
+        double q[4];
+        for (int k = 0; k < 4; ++k) {
+            if (!isfinite(sf->bone_orientation[k])) return -1;
+            q[k] = sf->bone_orientation[k];
+        }
+        for (int k = 0; k < 3; ++k)
+            if (!isfinite(sf->bone_acceleration[k])) return -1;
+        if (quat_normalize(q) != 0) return -1;
+        double m[9];
+        quat_to_mat3(m, q);
+        for (int k = 0; k < 9; ++k) orientation[s * 9 + k] = (float)m[k];
+        for (int k = 0; k < 3; ++k) acceleration[s * 3 + k] = sf->bone_acceleration[k];
+    }
+    return 0;
+}
+
+static int all_finite(const float *v, size_t n)
+{
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Poses                                                                                       */
+
+static int64_t pose_stamp(const character *ch, const mocap_frame *f, int64_t taken_ns)
+{
+    int64_t now = mocap_monotonic_ns();
+    /* Live frames are stamped on the monotonic clock: the pose is stamped on it too. A replay's
+     * frames carry recorded times: the pose is the frame's stamp plus the real time the frame
+     * spent in the solver (waiting + inference), so pose - frame is still the solver latency. */
+    if (!ch->replay) return now;
+    return f->emitted_ns + (now - taken_ns);
+}
+
+static void push_pose(character *ch, const mocap_pose *pose)
+{
+    mocap_pose *slot = (mocap_pose *)spsc_ring_reserve(&ch->poses);
+    if (!slot) {
+        mocap_atomic_add_u64(&ch->poses_dropped, 1);
+        return;
+    }
+    *slot = *pose;
+    spsc_ring_commit(&ch->poses);
+}
+
+/* NaN/Inf input or output: nothing reaches the model state; the previous pose is repeated for
+ * this frame with MOCAP_POSE_INCOMPLETE set (nothing is emitted before the first pose). */
+static void hold_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns)
+{
+    character *ch = s->chars[c];
+    if (!ch->have_last_pose) return;
+    mocap_pose *p = &s->pose;
+    *p = ch->last_pose;
+    p->sequence = ch->pose_sequence++;
+    p->frame_sequence = f->sequence;
+    p->time_s = f->time_s;
+    p->flags = (p->flags & ~(uint32_t)MOCAP_POSE_CORRECTED) | MOCAP_POSE_INCOMPLETE;
+    p->newest_receive_ns = f->newest_receive_ns;
+    p->frame_emitted_ns = f->emitted_ns;
+    p->pose_emitted_ns = pose_stamp(ch, f, taken_ns);
+    push_pose(ch, p);
+}
+
+static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns,
+                       const float *rot, const float *vel, const float *contact)
+{
+    character *ch = s->chars[c];
+    double q[MOCAP_JOINT_COUNT][4];
+    double rel[MOCAP_JOINT_COUNT][3];
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, q[j]);
+    const double zero[3] = {0, 0, 0};
+    skeleton_fk(&s->sk, (const double (*)[4])q, zero, NULL, rel);
+    if (!ch->drift.initialized) drift_reset(&ch->drift, s->sk.offsets[0]);
+    double v[3] = {vel[0], vel[1], vel[2]};
+    double p[2] = {contact[0], contact[1]};
+    double feet[2][3];
+    memcpy(feet[0], rel[SKELETON_LEFT_FOOT], sizeof feet[0]);
+    memcpy(feet[1], rel[SKELETON_RIGHT_FOOT], sizeof feet[1]);
+    double root[3];
+    int corrected = drift_step(&ch->drift, &s->drift, v, p, (const double (*)[3])feet, root);
+
+    mocap_pose *pose = &s->pose;
+    pose->sequence = ch->pose_sequence++;
+    pose->frame_sequence = f->sequence;
+    pose->time_s = f->time_s;
+    pose->character = (uint32_t)c;
+    uint32_t flags = 0;
+    if (p[0] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_LEFT;
+    if (p[1] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_RIGHT;
+    if (corrected) flags |= MOCAP_POSE_CORRECTED;
+    if (!(f->flags & MOCAP_FRAME_COMPLETE)) flags |= MOCAP_POSE_INCOMPLETE;
+    pose->flags = flags;
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+        for (int k = 0; k < 4; ++k) pose->joint_rotations[j][k] = (float)q[j][k];
+        for (int k = 0; k < 3; ++k) pose->joint_positions[j][k] = (float)(root[k] + rel[j][k]);
+    }
+    for (int k = 0; k < 3; ++k) {
+        pose->root_position[k] = (float)root[k];
+        pose->root_velocity[k] = vel[k];
+    }
+    pose->foot_contact[0] = contact[0];
+    pose->foot_contact[1] = contact[1];
+    pose->newest_receive_ns = f->newest_receive_ns;
+    pose->frame_emitted_ns = f->emitted_ns;
+    pose->pose_emitted_ns = pose_stamp(ch, f, taken_ns);
+    ch->last_pose = *pose;
+    ch->have_last_pose = 1;
+    push_pose(ch, pose);
+}
+
+static void reset_character_state(mocap_solver *s, character *ch)
+{
+    size_t n = (size_t)s->L * (size_t)s->H;
+    memset(ch->state_h, 0, n * sizeof(float));
+    memset(ch->state_c, 0, n * sizeof(float));
+    ch->drift.initialized = 0;
+    ch->have_last_pose = 0;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* One tick                                                                                    */
+
+mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_frame *const *frames,
+                          const int64_t *taken_ns, int n)
+{
+    if (!s || (n > 0 && (!chars || !frames)) || n < 0 || n > s->count)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver_solve: bad arguments");
+    if (!s->prepared) return mocap_fail(MOCAP_ERR_STATE, "solver_solve: solver not prepared");
+    const int64_t t0 = mocap_monotonic_ns();
+    const int L = s->L, H = s->H;
+    int nb = 0;
+    for (int i = 0; i < n; ++i) {
+        int32_t c = chars[i];
+        if (c < 0 || c >= s->count)
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver_solve: character %d", (int)c);
+        character *ch = s->chars[c];
+        int64_t taken = taken_ns ? taken_ns[i] : t0;
+        if (mocap_atomic_exchange_int(&ch->reset_requested, 0)) reset_character_state(s, ch);
+        if (s->config.require_calibration && !(frames[i]->flags & MOCAP_FRAME_CALIBRATED)) {
+            mocap_atomic_add_u64(&ch->frames_uncalibrated, 1);
+            continue;
+        }
+        if (solver_frame_input(frames[i], s->in_ori[nb], s->in_acc[nb]) != 0) {
+            mocap_atomic_add_u64(&ch->frames_nonfinite, 1);
+            hold_pose(s, c, frames[i], taken);
+            continue;
+        }
+        s->tick_taken[i] = taken;
+        s->batch_index[nb++] = i;
+    }
+    if (nb == 0) return MOCAP_OK;
+
+    /* Gather: inputs and each character's [L][H] state into the stream's [B][..] / [L][B][H]. */
+    ort_stream *st = s->streams[nb - 1];
+    float *ori = ort_stream_orientation(st), *acc = ort_stream_acceleration(st);
+    float *sh = ort_stream_state_h(st), *sc = ort_stream_state_c(st);
+    for (int b = 0; b < nb; ++b) {
+        int i = s->batch_index[b];
+        character *ch = s->chars[chars[i]];
+        memcpy(ori + (size_t)b * 54, s->in_ori[b], sizeof s->in_ori[b]);
+        memcpy(acc + (size_t)b * 18, s->in_acc[b], sizeof s->in_acc[b]);
+        for (int l = 0; l < L; ++l) {
+            memcpy(sh + ((size_t)l * nb + b) * H, ch->state_h + (size_t)l * H, (size_t)H * sizeof(float));
+            memcpy(sc + ((size_t)l * nb + b) * H, ch->state_c + (size_t)l * H, (size_t)H * sizeof(float));
+        }
+        mocap_atomic_add_u64(&ch->frames_solved, 1);
+        if (s->tap) s->tap(s->tap_user, chars[i], frames[i], s->in_ori[b], s->in_acc[b]);
+    }
+    const int64_t r0 = mocap_monotonic_ns();
+    mocap_status rs = ort_stream_run(st);
+    const int64_t r1 = mocap_monotonic_ns();
+    if (rs != MOCAP_OK) {
+        /* The states were not touched (they live in the characters); hold the poses. */
+        for (int b = 0; b < nb; ++b) {
+            int i = s->batch_index[b];
+            mocap_atomic_add_u64(&s->chars[chars[i]]->run_failures, 1);
+            hold_pose(s, chars[i], frames[i], s->tick_taken[i]);
+        }
+        return rs;
+    }
+
+    /* Scatter: outputs -> poses; new state back to each character unless it is not finite. */
+    const float *rot = ort_stream_joint_rotations(st);
+    const float *vel = ort_stream_root_velocity(st);
+    const float *con = ort_stream_foot_contact(st);
+    sh = ort_stream_state_h(st);
+    sc = ort_stream_state_c(st);
+    for (int b = 0; b < nb; ++b) {
+        int i = s->batch_index[b];
+        character *ch = s->chars[chars[i]];
+        int ok = all_finite(rot + (size_t)b * 216, 216) && all_finite(vel + (size_t)b * 3, 3) &&
+                 all_finite(con + (size_t)b * 2, 2);
+        for (int l = 0; ok && l < L; ++l)
+            ok = all_finite(sh + ((size_t)l * nb + b) * H, (size_t)H) &&
+                 all_finite(sc + ((size_t)l * nb + b) * H, (size_t)H);
+        if (!ok) {
+            mocap_atomic_add_u64(&ch->outputs_nonfinite, 1);
+            hold_pose(s, chars[i], frames[i], s->tick_taken[i]);
+            continue;
+        }
+        for (int l = 0; l < L; ++l) {
+            memcpy(ch->state_h + (size_t)l * H, sh + ((size_t)l * nb + b) * H, (size_t)H * sizeof(float));
+            memcpy(ch->state_c + (size_t)l * H, sc + ((size_t)l * nb + b) * H, (size_t)H * sizeof(float));
+        }
+        build_pose(s, chars[i], frames[i], s->tick_taken[i], rot + (size_t)b * 216,
+                   vel + (size_t)b * 3, con + (size_t)b * 2);
+    }
+    const int64_t t1 = mocap_monotonic_ns();
+    mocap_atomic_add_u64(&s->ticks, 1);
+    if (nb >= 2) mocap_atomic_add_u64(&s->batched_calls, 1);
+    if ((uint64_t)nb > mocap_atomic_load_u64(&s->max_batch)) mocap_atomic_store_u64(&s->max_batch, (uint64_t)nb);
+    mocap_atomic_add_u64(&s->solve_ns_total, (uint64_t)(t1 - t0));
+    mocap_atomic_add_u64(&s->run_ns_total, (uint64_t)(r1 - r0));
+    if ((uint64_t)(t1 - t0) > mocap_atomic_load_u64(&s->solve_ns_max))
+        mocap_atomic_store_u64(&s->solve_ns_max, (uint64_t)(t1 - t0));
+    return MOCAP_OK;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Thread                                                                                      */
+
+/* Make the character's next usable frame pending (skipping uncalibrated ones), if any. */
+static void pull_frame(mocap_solver *s, character *ch, int64_t now)
+{
+    while (!ch->pending && !ch->session_ended) {
+        if (ch->buf_pos == ch->buf_count) {
+            uint32_t got = 0;
+            mocap_status st = mocap_session_drain(ch->session, ch->buf, FRAME_BUFFER, &got);
+            if (st == MOCAP_ERR_END_OF_STREAM) {
+                ch->session_ended = 1;
+                return;
+            }
+            if (got == 0) return;
+            ch->buf_count = got;
+            ch->buf_pos = 0;
+            ch->buf_taken_ns = now;
+        }
+        const mocap_frame *f = &ch->buf[ch->buf_pos++];
+        if (s->config.require_calibration && !(f->flags & MOCAP_FRAME_CALIBRATED)) {
+            mocap_atomic_add_u64(&ch->frames_uncalibrated, 1);
+            continue;
+        }
+        ch->pending = f;
+        ch->last_frame_ns = now;
+    }
+}
+
+static void solver_main(void *arg)
+{
+    mocap_solver *s = (mocap_solver *)arg;
+    int64_t first_ready_ns = 0;
+    while (!mocap_atomic_load_int(&s->stop)) {
+        const int64_t now = mocap_monotonic_ns();
+        int awaited = 0, ready = 0, backlog = 0;
+        for (int c = 0; c < s->count; ++c) {
+            character *ch = s->chars[c];
+            if (mocap_atomic_load_int(&ch->ended)) continue;
+            /* A fast replay whose consumer is behind keeps its frames (its session waits). */
+            if (ch->replay_fast && spsc_ring_size(&ch->poses) >= POSE_RING_POSES) continue;
+            pull_frame(s, ch, now);
+            if (!ch->pending) {
+                if (ch->session_ended) {
+                    mocap_atomic_store_int(&ch->ended, 1); /* every pose was pushed before */
+                    continue;
+                }
+                /* Waited for only while it delivers frames regularly (not unplugged/silent). */
+                if (ch->last_frame_ns != 0 && now - ch->last_frame_ns < ABSENT_PERIODS * s->period_ns)
+                    ++awaited;
+                continue;
+            }
+            ++awaited;
+            ++ready;
+            if (ch->buf_pos < ch->buf_count) backlog = 1;
+        }
+        if (ready == 0) {
+            first_ready_ns = 0;
+            mocap_sleep_ms(1);
+            continue;
+        }
+        if (first_ready_ns == 0) first_ready_ns = now;
+        /* Stragglers: wait while some awaited character has no frame yet, up to one period,
+         * unless a ready character has a backlog to catch up on. */
+        if (ready < awaited && !backlog && now - first_ready_ns < s->period_ns) {
+            mocap_sleep_ms(1);
+            continue;
+        }
+        int n = 0;
+        for (int c = 0; c < s->count; ++c) {
+            character *ch = s->chars[c];
+            if (!ch->pending) continue;
+            if (ch->replay_fast && spsc_ring_size(&ch->poses) >= POSE_RING_POSES) continue;
+            s->tick_chars[n] = c;
+            s->tick_frames[n] = ch->pending;
+            s->tick_taken[n] = ch->buf_taken_ns;
+            ++n;
+        }
+        int64_t taken[MOCAP_MAX_CHARACTERS];
+        memcpy(taken, s->tick_taken, (size_t)n * sizeof taken[0]);
+        solver_solve(s, s->tick_chars, s->tick_frames, taken, n);
+        for (int i = 0; i < n; ++i) s->chars[s->tick_chars[i]]->pending = NULL;
+        first_ready_ns = 0;
+    }
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Public API                                                                                  */
+
+mocap_status mocap_solver_config_defaults(mocap_solver_config *c)
+{
+    if (!c) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver config is NULL");
+    memset(c, 0, sizeof *c);
+    c->struct_size = sizeof *c;
+    c->contact_threshold = 0.5f;
+    c->floor_height = 0.0f;
+    c->drift_correction = 1;
+    c->require_calibration = 1;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *config,
+                               mocap_solver **out)
+{
+    if (!out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "mocap_solver_open: out is NULL");
+    *out = NULL;
+    if (!model) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "mocap_solver_open: model is NULL");
+    mocap_solver_config cfg;
+    if (config) {
+        if (config->struct_size != sizeof(mocap_solver_config))
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver config struct_size is %u, this "
+                              "library expects %u (call mocap_solver_config_defaults)",
+                              (unsigned)config->struct_size, (unsigned)sizeof(mocap_solver_config));
+        cfg = *config;
+    } else {
+        mocap_solver_config_defaults(&cfg);
+    }
+    if (!(cfg.contact_threshold >= 0.0f && cfg.contact_threshold <= 1.0f))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "contact_threshold %g is outside 0..1",
+                          (double)cfg.contact_threshold);
+    if (!isfinite(cfg.floor_height))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "floor_height is not finite");
+    const mocap_model_info *info = model_info(model);
+    if (!(info->frame_rate > 0.0f) || info->state_layers < 1 || info->state_size < 1)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "model info is not usable");
+    mocap_solver *s = (mocap_solver *)calloc(1, sizeof *s);
+    if (!s) return mocap_fail(MOCAP_ERR_NO_MEMORY, "mocap_solver_open: out of memory");
+    s->model = model;
+    s->info = *info;
+    s->config = cfg;
+    mocap_status st = skeleton_init(&s->sk, info->joint_parents, (const float (*)[3])info->rest_offsets,
+                                    MOCAP_JOINT_COUNT);
+    if (st != MOCAP_OK) {
+        free(s);
+        return st;
+    }
+    s->L = info->state_layers;
+    s->H = info->state_size;
+    s->period_ns = (int64_t)(1e9 / info->frame_rate);
+    s->drift.dt = 1.0 / info->frame_rate;
+    s->drift.contact_threshold = cfg.contact_threshold;
+    s->drift.floor_height = cfg.floor_height;
+    s->drift.foot_height[0] = s->sk.foot_height[0];
+    s->drift.foot_height[1] = s->sk.foot_height[1];
+    s->drift.enabled = cfg.drift_correction != 0;
+    *out = s;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_add_character(mocap_solver *s, mocap_session *session, int32_t *character_out)
+{
+    if (!s || !session) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver or session is NULL");
+    if (s->started || s->prepared)
+        return mocap_fail(MOCAP_ERR_STATE, "characters are added before mocap_solver_start");
+    if (s->count >= MOCAP_MAX_CHARACTERS)
+        return mocap_fail(MOCAP_ERR_STATE, "a solver takes at most %d characters", MOCAP_MAX_CHARACTERS);
+    for (int c = 0; c < s->count; ++c)
+        if (s->chars[c]->session == session)
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "this session is already character %d", c);
+    const mocap_session_config *sc = session_config(session);
+    double rate = sc->output_rate_hz, want = s->info.frame_rate;
+    if (!(fabs(rate - want) <= 1e-3 * want))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "the session's output rate is %g Hz but the "
+                          "model %s expects %g Hz frames: open the session with output_rate_hz = %g",
+                          rate, s->info.model_name, want, want);
+    character *ch = (character *)calloc(1, sizeof *ch);
+    size_t n = (size_t)s->L * (size_t)s->H;
+    if (ch) {
+        ch->state_h = (float *)calloc(2 * n, sizeof(float));
+        if (ch->state_h) ch->state_c = ch->state_h + n;
+    }
+    if (!ch || !ch->state_h || spsc_ring_init(&ch->poses, sizeof(mocap_pose), POSE_RING_POSES) != 0) {
+        if (ch) {
+            free(ch->state_h);
+            spsc_ring_destroy(&ch->poses);
+        }
+        free(ch);
+        return mocap_fail(MOCAP_ERR_NO_MEMORY, "out of memory adding a character");
+    }
+    ch->session = session;
+    ch->replay = sc->source_kind == MOCAP_SOURCE_REPLAY;
+    ch->replay_fast = ch->replay && !sc->replay_realtime;
+    s->chars[s->count] = ch;
+    if (character_out) *character_out = s->count;
+    s->count++;
+    return MOCAP_OK;
+}
+
+mocap_status solver_prepare(mocap_solver *s)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver is NULL");
+    if (s->prepared) return MOCAP_OK;
+    if (s->count == 0) return mocap_fail(MOCAP_ERR_STATE, "the solver has no characters: add one first");
+    for (int b = 1; b <= s->count; ++b) {
+        mocap_status st = ort_stream_create(model_ort(s->model), b, 1, &s->streams[b - 1]);
+        if (st != MOCAP_OK) {
+            for (int k = 0; k < b - 1; ++k) {
+                ort_stream_destroy(s->streams[k]);
+                s->streams[k] = NULL;
+            }
+            return st;
+        }
+    }
+    s->prepared = 1;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_start(mocap_solver *s)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver is NULL");
+    if (s->started) return mocap_fail(MOCAP_ERR_STATE, "solver already started");
+    mocap_status st = solver_prepare(s);
+    if (st != MOCAP_OK) return st;
+    if (mocap_thread_start(&s->thread, solver_main, s, "mocap-solver") != 0)
+        return mocap_fail(MOCAP_ERR_NO_MEMORY, "could not start the solver thread");
+    s->started = 1;
+    return MOCAP_OK;
+}
+
+void mocap_solver_close(mocap_solver *s)
+{
+    if (!s) return;
+    mocap_atomic_store_int(&s->stop, 1);
+    if (s->thread) mocap_thread_join(s->thread);
+    for (int b = 0; b < MOCAP_MAX_CHARACTERS; ++b) ort_stream_destroy(s->streams[b]);
+    for (int c = 0; c < s->count; ++c) {
+        spsc_ring_destroy(&s->chars[c]->poses);
+        free(s->chars[c]->state_h);
+        free(s->chars[c]);
+    }
+    free(s);
+}
+
+static mocap_status check_character(mocap_solver *s, int32_t c)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver is NULL");
+    if (c < 0 || c >= s->count)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "character %d does not exist (%d added)",
+                          (int)c, s->count);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_poll_latest(mocap_solver *s, int32_t c, mocap_pose *out)
+{
+    mocap_status st = check_character(s, c);
+    if (st != MOCAP_OK) return st;
+    if (!out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "out is NULL");
+    character *ch = s->chars[c];
+    int ended = mocap_atomic_load_int(&ch->ended); /* before popping: see mocap_solver_drain */
+    int got = 0;
+    while (spsc_ring_pop(&ch->poses, &ch->latest) == 0) got = 1;
+    if (got) {
+        *out = ch->latest;
+        return MOCAP_OK;
+    }
+    if (ended) return mocap_fail(MOCAP_ERR_END_OF_STREAM, "character %d: replay finished", (int)c);
+    return MOCAP_ERR_NO_DATA;
+}
+
+mocap_status mocap_solver_drain(mocap_solver *s, int32_t c, mocap_pose *out, uint32_t capacity,
+                                uint32_t *count)
+{
+    mocap_status st = check_character(s, c);
+    if (st != MOCAP_OK) return st;
+    if (!out || !count) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "out or count is NULL");
+    character *ch = s->chars[c];
+    /* ended is set after the last pose was pushed: read it first, so that "ended and nothing
+     * popped" really means nothing is left. */
+    int ended = mocap_atomic_load_int(&ch->ended);
+    uint32_t n = 0;
+    while (n < capacity && spsc_ring_pop(&ch->poses, &out[n]) == 0) ++n;
+    *count = n;
+    if (n > 0) {
+        ch->latest = out[n - 1];
+        return MOCAP_OK;
+    }
+    if (ended && capacity > 0)
+        return mocap_fail(MOCAP_ERR_END_OF_STREAM, "character %d: replay finished", (int)c);
+    return MOCAP_ERR_NO_DATA;
+}
+
+mocap_status mocap_solver_reset_character(mocap_solver *s, int32_t c)
+{
+    mocap_status st = check_character(s, c);
+    if (st != MOCAP_OK) return st;
+    mocap_atomic_store_int(&s->chars[c]->reset_requested, 1);
+    return MOCAP_OK;
+}
+
+void solver_set_input_tap(mocap_solver *s, solver_input_tap tap, void *user)
+{
+    if (!s || s->started) return;
+    s->tap = tap;
+    s->tap_user = user;
+}
+
+mocap_status solver_get_stats(mocap_solver *s, int32_t which, solver_stats *out)
+{
+    if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver or out is NULL");
+    if (which != -1) {
+        mocap_status st = check_character(s, which);
+        if (st != MOCAP_OK) return st;
+    }
+    memset(out, 0, sizeof *out);
+    out->ticks = mocap_atomic_load_u64(&s->ticks);
+    out->batched_calls = mocap_atomic_load_u64(&s->batched_calls);
+    out->max_batch = mocap_atomic_load_u64(&s->max_batch);
+    out->solve_ns_total = mocap_atomic_load_u64(&s->solve_ns_total);
+    out->solve_ns_max = mocap_atomic_load_u64(&s->solve_ns_max);
+    out->run_ns_total = mocap_atomic_load_u64(&s->run_ns_total);
+    for (int c = 0; c < s->count; ++c) {
+        if (which != -1 && c != which) continue;
+        character *ch = s->chars[c];
+        out->frames_solved += mocap_atomic_load_u64(&ch->frames_solved);
+        out->frames_uncalibrated += mocap_atomic_load_u64(&ch->frames_uncalibrated);
+        out->frames_nonfinite += mocap_atomic_load_u64(&ch->frames_nonfinite);
+        out->outputs_nonfinite += mocap_atomic_load_u64(&ch->outputs_nonfinite);
+        out->poses_dropped += mocap_atomic_load_u64(&ch->poses_dropped);
+        out->run_failures += mocap_atomic_load_u64(&ch->run_failures);
+    }
+    return MOCAP_OK;
+}

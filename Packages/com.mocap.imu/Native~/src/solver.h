@@ -1,0 +1,73 @@
+/* The pose solver (public API in mocap_imu.h, "Pose model and solver"): internal pieces that
+ * tests and tools reach.
+ *
+ * Thread: each tick it takes at most one new frame from every character's session (it is the
+ * only consumer of those sessions), feeds the characters that have one to the model in ONE
+ * ort_stream_run (batch B = characters ready; one stream per B = 1..N created at start; each
+ * character's recurrent state [L][H] is gathered into / scattered out of the stream's [L][B][H]
+ * state), and turns the outputs into poses pushed to a per-character SPSC ring. It waits at most
+ * one frame period for characters that have no frame yet, and not at all while some character
+ * has a backlog, so a late or unplugged device never stalls the others. A replay played as fast
+ * as possible loses nothing: its frames stay in its session (which then waits) while its pose
+ * ring is full. Nothing is allocated per frame. */
+#ifndef MOCAP_SOLVER_H
+#define MOCAP_SOLVER_H
+
+#include <stdint.h>
+#include "mocap_imu.h"
+#include "onnx_runtime.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* model.c */
+ort_model *model_ort(mocap_model *model);
+const mocap_model_info *model_info(const mocap_model *model);
+
+/* Totals of one solver (all characters). */
+typedef struct solver_stats {
+    uint64_t ticks;               /* inference calls (one per tick that had a frame) */
+    uint64_t batched_calls;       /* calls with B >= 2 */
+    uint64_t max_batch;
+    uint64_t frames_solved;       /* frames fed to the model */
+    uint64_t frames_uncalibrated; /* skipped: not calibrated while require_calibration */
+    uint64_t frames_nonfinite;    /* NaN/Inf inputs: not fed, previous pose held */
+    uint64_t outputs_nonfinite;   /* NaN/Inf model outputs: state kept, previous pose held */
+    uint64_t poses_dropped;       /* live characters whose consumer was too slow */
+    uint64_t run_failures;        /* ort_stream_run errors (poses held) */
+    uint64_t solve_ns_total;      /* gather + run + scatter + poses, summed over ticks */
+    uint64_t solve_ns_max;
+    uint64_t run_ns_total;        /* inside ort_stream_run */
+} solver_stats;
+
+/* Totals (any character == -1) or one character's counters (ticks/batched/max/ns are solver
+ * wide either way). Any thread. */
+mocap_status solver_get_stats(mocap_solver *solver, int32_t character, solver_stats *out);
+
+/* A calibrated frame as model inputs: orientation [6][3][3] (bone -> model, row-major) from
+ * bone_orientation and acceleration [6][3] from bone_acceleration. Returns 0, or -1 when any
+ * value is NaN/Inf or a quaternion is zero (nothing of that frame may reach the model). */
+int solver_frame_input(const mocap_frame *frame, float orientation[54], float acceleration[18]);
+
+/* Create the per-batch-size streams (mocap_solver_start does it; tests that drive
+ * solver_solve directly call it instead of starting the thread). */
+mocap_status solver_prepare(mocap_solver *solver);
+
+/* One tick over explicit frames: frames[i] belongs to characters[i] (distinct); taken_ns[i] is
+ * when it left its session (may be NULL: now). Frames are filtered (calibration, NaN/Inf),
+ * solved in one batched call and their poses pushed to the characters' rings. The solver
+ * thread calls this; so can a test, on a prepared solver that was not started. */
+mocap_status solver_solve(mocap_solver *solver, const int32_t *characters,
+                          const mocap_frame *const *frames, const int64_t *taken_ns, int n);
+
+/* Called on the solver thread for every frame fed to the model, with the exact inputs (for
+ * golden tests and debugging). Set before mocap_solver_start. */
+typedef void (*solver_input_tap)(void *user, int32_t character, const mocap_frame *frame,
+                                 const float orientation[54], const float acceleration[18]);
+void solver_set_input_tap(mocap_solver *solver, solver_input_tap tap, void *user);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,704 @@
+// The pose solver (src/solver.c, src/model.c) through the public API against the REAL ONNX
+// Runtime (scripts/fetch_onnxruntime.sh) and the shipped model (Runtime/Models/
+// mocap_pose_fp32.onnx, untrained: only its contract is relied on, never its accuracy).
+// Skips only when ONNX Runtime cannot be loaded.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fcntl.h>
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include "e2e_support.h"
+#include "test_support.h"
+
+extern "C" {
+#include "mocap_math.h"
+#include "onnx_runtime.h"
+#include "platform.h"
+#include "skeleton_fk.h"
+#include "solver.h"
+}
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+const fs::path kTestsDir = fs::path(__FILE__).parent_path();
+const std::string kShippedModel =
+    (kTestsDir / ".." / ".." / "Runtime" / "Models" / "mocap_pose_fp32.onnx").string();
+
+#define REQUIRE_ORT()                                                                         \
+    do {                                                                                      \
+        if (!ort_library_available(nullptr))                                                  \
+            GTEST_SKIP() << "ONNX Runtime not available: " << mocap_last_error();             \
+    } while (0)
+
+double seconds_since(Clock::time_point t0)
+{
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+struct Model {
+    mocap_model *m = nullptr;
+    ~Model() { mocap_model_close(m); }
+};
+struct Solver {
+    mocap_solver *s = nullptr;
+    ~Solver() { mocap_solver_close(s); }
+};
+struct Sessions {
+    std::vector<mocap_session *> list;
+    ~Sessions()
+    {
+        for (auto *s : list) mocap_session_close(s);
+    }
+};
+
+mocap_status open_model(const std::string &path, mocap_model **out)
+{
+    mocap_model_options o;
+    mocap_model_options_defaults(&o);
+    o.intra_op_threads = 1;  // the machine may be busy: one thread gives stable timings
+    return mocap_model_open(path.c_str(), &o, out);
+}
+
+// A short generated capture with a calibration prelude (2 s heading, 1 s strap, 2 s T-pose).
+synth_config short_capture(uint64_t seed, double motion_s, const char *motion,
+                           const std::string &path)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = seed;
+    cfg.heading_s = 2.0;
+    cfg.strap_s = 1.0;
+    cfg.tpose_s = 2.0;
+    cfg.motion_s = motion_s;
+    add_realistic_noise(cfg);
+    EXPECT_EQ(synth_write_capture(&cfg, synth_builtin_motion(motion), nullptr, path.c_str(), nullptr),
+              MOCAP_OK) << mocap_last_error();
+    return cfg;
+}
+
+// Opens a replay of the capture with both prelude windows scheduled before the start.
+mocap_session *open_replay(const std::string &path, const synth_config &cfg, int realtime = 0,
+                           float rate = 60.0f)
+{
+    mocap_session_config c;
+    mocap_config_defaults(&c);
+    c.source_kind = MOCAP_SOURCE_REPLAY;
+    c.replay_realtime = realtime;
+    c.output_rate_hz = rate;
+    snprintf(c.path, sizeof c.path, "%s", path.c_str());
+    mocap_session *s = nullptr;
+    EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_OK) << mocap_last_error();
+    if (!s) return nullptr;
+    double t0 = synth_session_time(&cfg, 0.0);
+    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
+                                         (float)(cfg.heading_s - 1.0)), MOCAP_OK);
+    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_TPOSE,
+                                         t0 + cfg.heading_s + cfg.strap_s + 0.5,
+                                         (float)(cfg.tpose_s - 1.0)), MOCAP_OK);
+    return s;
+}
+
+// Drains every character until each reported END_OF_STREAM (or the timeout).
+bool drain_to_end(mocap_solver *solver, int characters, std::vector<std::vector<mocap_pose>> &poses,
+                  double timeout_s)
+{
+    poses.assign(characters, {});
+    std::vector<int> ended(characters, 0);
+    std::vector<mocap_pose> buf(64);
+    auto t0 = Clock::now();
+    int remaining = characters;
+    while (remaining > 0 && seconds_since(t0) < timeout_s) {
+        bool any = false;
+        for (int c = 0; c < characters; ++c) {
+            if (ended[c]) continue;
+            uint32_t n = 0;
+            mocap_status st = mocap_solver_drain(solver, c, buf.data(), (uint32_t)buf.size(), &n);
+            poses[c].insert(poses[c].end(), buf.begin(), buf.begin() + n);
+            if (n > 0) any = true;
+            if (st == MOCAP_ERR_END_OF_STREAM) {
+                ended[c] = 1;
+                --remaining;
+            } else if (st != MOCAP_OK && st != MOCAP_ERR_NO_DATA) {
+                ADD_FAILURE() << mocap_status_name(st) << ": " << mocap_last_error();
+                return false;
+            }
+        }
+        if (!any) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return remaining == 0;
+}
+
+double quat_norm_f(const float q[4])
+{
+    return std::sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
+}
+
+// Every pose: unit finite rotations, FK positions consistent with the rotations, consecutive.
+void check_poses(const std::vector<mocap_pose> &poses, const mocap_model_info &info, int character)
+{
+    skeleton sk;
+    ASSERT_EQ(skeleton_init(&sk, info.joint_parents, info.rest_offsets, MOCAP_JOINT_COUNT), MOCAP_OK);
+    for (size_t i = 0; i < poses.size(); ++i) {
+        const mocap_pose &p = poses[i];
+        SCOPED_TRACE(testing::Message() << "character " << character << " pose " << i);
+        ASSERT_EQ(p.sequence, (uint64_t)i);
+        ASSERT_EQ(p.character, (uint32_t)character);
+        if (i > 0) {
+            ASSERT_GT(p.frame_sequence, poses[i - 1].frame_sequence);
+            ASSERT_GT(p.time_s, poses[i - 1].time_s);
+        }
+        double q[MOCAP_JOINT_COUNT][4], pos[MOCAP_JOINT_COUNT][3];
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            for (int k = 0; k < 4; ++k) {
+                ASSERT_TRUE(std::isfinite(p.joint_rotations[j][k]));
+                q[j][k] = p.joint_rotations[j][k];
+            }
+            ASSERT_NEAR(quat_norm_f(p.joint_rotations[j]), 1.0, 1e-5);
+        }
+        double root[3] = {p.root_position[0], p.root_position[1], p.root_position[2]};
+        skeleton_fk(&sk, q, root, nullptr, pos);
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j)
+            for (int k = 0; k < 3; ++k) ASSERT_NEAR(p.joint_positions[j][k], pos[j][k], 2e-5) << j;
+        for (int k = 0; k < 2; ++k) {
+            ASSERT_GE(p.foot_contact[k], 0.0f);
+            ASSERT_LE(p.foot_contact[k], 1.0f);
+        }
+        ASSERT_EQ((p.flags & MOCAP_POSE_CONTACT_LEFT) != 0, p.foot_contact[0] >= 0.5f);
+        // Latency stamps of a replay: receive <= frame <= pose, all on the recorded timeline.
+        ASSERT_LE(p.newest_receive_ns, p.frame_emitted_ns);
+        ASSERT_LE(p.frame_emitted_ns, p.pose_emitted_ns);
+        // Drift correction keeps every sole on or above the floor (0).
+        for (int f = 0; f < 2; ++f) {
+            int j = f == 0 ? SKELETON_LEFT_FOOT : SKELETON_RIGHT_FOOT;
+            ASSERT_GE(p.joint_positions[j][1] - sk.foot_height[f], -1e-4);
+        }
+    }
+}
+
+std::string python_with_onnx()
+{
+    for (const char *p : {"/usr/bin/python3", "python3"}) {
+        std::string cmd = std::string("\"") + p + "\" -c \"import onnx\" >/dev/null 2>&1";
+        if (std::system(cmd.c_str()) == 0) return p;
+    }
+    return "";
+}
+
+struct FakeReceiver {
+    int master = -1;
+    std::string link;
+    explicit FakeReceiver(const std::string &link_path) : link(link_path)
+    {
+        int slave = -1;
+        char name[256];
+        struct termios raw;
+        cfmakeraw(&raw);
+        if (openpty(&master, &slave, name, &raw, nullptr) != 0) throw std::runtime_error("openpty");
+        close(slave);
+        fs::remove(link);
+        fs::create_symlink(name, link);
+    }
+    ~FakeReceiver() { unplug(); }
+    void unplug()
+    {
+        if (master >= 0) close(master);
+        master = -1;
+    }
+    void write_all(const uint8_t *data, size_t len)
+    {
+        while (len > 0) {
+            ssize_t n = ::write(master, data, len);
+            if (n < 0) {
+                if (errno == EINTR || errno == EAGAIN) continue;
+                return;
+            }
+            data += n;
+            len -= (size_t)n;
+        }
+    }
+};
+
+void report_timing(mocap_solver *solver, const char *what)
+{
+    solver_stats st;
+    ASSERT_EQ(solver_get_stats(solver, -1, &st), MOCAP_OK);
+    if (st.ticks == 0) return;
+    printf("[ timing   ] %s: %llu ticks, per tick %.1f us (inference %.1f us), max %.1f us, "
+           "batched calls %llu, max batch %llu\n", what, (unsigned long long)st.ticks,
+           st.solve_ns_total / 1e3 / st.ticks, st.run_ns_total / 1e3 / st.ticks,
+           st.solve_ns_max / 1e3, (unsigned long long)st.batched_calls,
+           (unsigned long long)st.max_batch);
+}
+
+}  // namespace
+
+TEST(Solver, MissingModelIsNotFoundNamingTheFile)
+{
+    REQUIRE_ORT();
+    mocap_model *m = nullptr;
+    std::string path = test_temp_path("no_such_pose_model.onnx");
+    EXPECT_EQ(open_model(path, &m), MOCAP_ERR_NOT_FOUND);
+    EXPECT_EQ(m, nullptr);
+    EXPECT_NE(std::string(mocap_last_error()).find("no_such_pose_model.onnx"), std::string::npos)
+        << mocap_last_error();
+}
+
+TEST(Solver, ModelInfoFollowsTheContract)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    mocap_model_info info;
+    ASSERT_EQ(mocap_model_get_info(model.m, &info), MOCAP_OK);
+    EXPECT_EQ(info.contract_version, 1);
+    EXPECT_FLOAT_EQ(info.frame_rate, 60.0f);
+    EXPECT_GE(info.state_layers, 1);
+    EXPECT_GE(info.state_size, 1);
+    EXPECT_EQ(info.joint_parents[0], -1);
+    EXPECT_EQ(info.joint_parents[20], 18);
+    EXPECT_STREQ(info.joint_names[10], "left_foot");
+    EXPECT_STREQ(info.precision, "fp32");
+    EXPECT_GT(info.rest_offsets[0][1], 0.5f);  // pelvis height
+    mocap_model_options bad;
+    mocap_model_options_defaults(&bad);
+    bad.struct_size = 4;
+    mocap_model *m = nullptr;
+    EXPECT_EQ(mocap_model_open(kShippedModel.c_str(), &bad, &m), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("struct_size"), std::string::npos);
+}
+
+// Wrong models are refused naming what differs; afterwards a correct model still opens and
+// solves a capture end to end in the same process.
+TEST(Solver, WrongModelIsRefusedByNameAndTheProcessStaysUsable)
+{
+    REQUIRE_ORT();
+    std::string dir = test_temp_dir();
+    std::string py = python_with_onnx();
+    ASSERT_FALSE(py.empty()) << "python3 with the onnx package is needed (python3-onnx)";
+    std::string cmd = "\"" + py + "\" \"" + (kTestsDir / "make_onnx_fixtures.py").string() + "\" \"" +
+                      dir + "\" >/dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    struct Case {
+        const char *file, *mention;
+    } cases[] = {{"wrong_version.onnx", "contract_version"},
+                 {"wrong_joint_name.onnx", "left_forearm"},
+                 {"wrong_input_name.onnx", "imu_orientation"},
+                 {"state_mismatch.onnx", "state"},
+                 {"not_onnx.onnx", "not a model ONNX Runtime can load"}};
+    for (const auto &c : cases) {
+        SCOPED_TRACE(c.file);
+        mocap_model *m = nullptr;
+        EXPECT_EQ(open_model(dir + "/" + c.file, &m), MOCAP_ERR_FORMAT);
+        EXPECT_EQ(m, nullptr);
+        std::string err = mocap_last_error();
+        EXPECT_NE(err.find(c.mention), std::string::npos) << err;
+        EXPECT_NE(err.find(c.file), std::string::npos) << err;
+    }
+
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = dir + "/after.cap";
+    synth_config cfg = short_capture(31, 2.0, "walk", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));
+    ASSERT_NE(sessions.list[0], nullptr);
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_session_start(sessions.list[0]), MOCAP_OK);
+    std::vector<std::vector<mocap_pose>> poses;
+    ASSERT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    EXPECT_GT(poses[0].size(), 100u);
+}
+
+TEST(Solver, SessionRateDifferentFromTheModelRateIsRefusedAtAddCharacter)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = test_temp_path("rate.cap");
+    synth_config cfg = short_capture(32, 1.0, "walk", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg, 0, 50.0f));
+    ASSERT_NE(sessions.list[0], nullptr);
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK);
+    int32_t ch = -1;
+    EXPECT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_ERR_INVALID_ARGUMENT);
+    std::string err = mocap_last_error();
+    EXPECT_NE(err.find("50 Hz"), std::string::npos) << err;
+    EXPECT_NE(err.find("60 Hz"), std::string::npos) << err;
+    // Nothing was added: starting is refused clearly, and bad indices too.
+    EXPECT_EQ(mocap_solver_start(solver.s), MOCAP_ERR_STATE);
+    mocap_pose pose;
+    EXPECT_EQ(mocap_solver_poll_latest(solver.s, 0, &pose), MOCAP_ERR_INVALID_ARGUMENT);
+}
+
+TEST(Solver, ReplaySolvedEndToEnd)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    mocap_model_info info;
+    mocap_model_get_info(model.m, &info);
+    std::string cap = test_temp_path("walk.cap");
+    synth_config cfg = short_capture(33, 6.0, "mixed", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));
+    ASSERT_NE(sessions.list[0], nullptr);
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(ch, 0);
+    EXPECT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_ERR_INVALID_ARGUMENT);
+    mocap_pose pose;
+    EXPECT_EQ(mocap_solver_poll_latest(solver.s, 0, &pose), MOCAP_ERR_NO_DATA);
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_ERR_STATE);
+    ASSERT_EQ(mocap_session_start(sessions.list[0]), MOCAP_OK);
+
+    std::vector<std::vector<mocap_pose>> poses;
+    ASSERT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    EXPECT_EQ(mocap_solver_poll_latest(solver.s, 0, &pose), MOCAP_ERR_END_OF_STREAM);
+    uint32_t n = 0;
+    EXPECT_EQ(mocap_solver_drain(solver.s, 0, &pose, 1, &n), MOCAP_ERR_END_OF_STREAM);
+    EXPECT_EQ(n, 0u);
+
+    // Every calibrated frame became a pose, nothing lost: poses + skipped == frames emitted.
+    mocap_session_stats ss;
+    ASSERT_EQ(mocap_session_get_stats(sessions.list[0], &ss), MOCAP_OK);
+    solver_stats st;
+    ASSERT_EQ(solver_get_stats(solver.s, 0, &st), MOCAP_OK);
+    EXPECT_EQ(ss.frames_dropped, 0u);
+    EXPECT_EQ(st.frames_nonfinite, 0u);
+    EXPECT_EQ(st.poses_dropped, 0u);
+    EXPECT_GT(st.frames_uncalibrated, 200u);  // the prelude
+    EXPECT_EQ(st.frames_solved, poses[0].size());
+    EXPECT_EQ(st.frames_solved + st.frames_uncalibrated, ss.frames_emitted);
+    // Calibrated from the end of the T-pose window (0.5 s before the motion) to the end.
+    EXPECT_GE((double)poses[0].size(), (cfg.motion_s + 0.4) * 60.0);
+    for (size_t i = 1; i < poses[0].size(); ++i)
+        ASSERT_EQ(poses[0][i].frame_sequence, poses[0][i - 1].frame_sequence + 1) << i;
+    check_poses(poses[0], info, 0);
+    report_timing(solver.s, "1 character");
+}
+
+// Three characters from three replays are solved in batched inference calls.
+TEST(Solver, ThreeReplaysAreBatchedInOneCallPerTick)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    mocap_model_info info;
+    mocap_model_get_info(model.m, &info);
+    Sessions sessions;
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK);
+    const char *motions[3] = {"mixed", "mixed", "mixed"};
+    for (int c = 0; c < 3; ++c) {
+        std::string cap = test_temp_path("c" + std::to_string(c) + ".cap");
+        synth_config cfg = short_capture(40 + c, 3.0 + c, motions[c], cap);
+        sessions.list.push_back(open_replay(cap, cfg));
+        ASSERT_NE(sessions.list.back(), nullptr);
+        int32_t ch = -1;
+        ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list.back(), &ch), MOCAP_OK);
+        EXPECT_EQ(ch, c);
+    }
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK) << mocap_last_error();
+    for (auto *s : sessions.list) ASSERT_EQ(mocap_session_start(s), MOCAP_OK);
+    std::vector<std::vector<mocap_pose>> poses;
+    ASSERT_TRUE(drain_to_end(solver.s, 3, poses, 120));
+    solver_stats total;
+    ASSERT_EQ(solver_get_stats(solver.s, -1, &total), MOCAP_OK);
+    EXPECT_GT(total.batched_calls, 100u);
+    EXPECT_EQ(total.max_batch, 3u);
+    EXPECT_LT(total.ticks, total.frames_solved);  // fewer calls than frames: batching
+    for (int c = 0; c < 3; ++c) {
+        mocap_session_stats ss;
+        mocap_session_get_stats(sessions.list[c], &ss);
+        solver_stats st;
+        solver_get_stats(solver.s, c, &st);
+        EXPECT_EQ(ss.frames_dropped, 0u);
+        EXPECT_EQ(st.frames_solved, poses[c].size());
+        EXPECT_EQ(st.frames_solved + st.frames_uncalibrated, ss.frames_emitted) << c;
+        check_poses(poses[c], info, c);
+    }
+    // Longer motions give more poses: the characters did not get mixed up.
+    EXPECT_LT(poses[0].size(), poses[1].size());
+    EXPECT_LT(poses[1].size(), poses[2].size());
+    report_timing(solver.s, "3 characters");
+}
+
+// A live character on a pseudo-terminal is unplugged; two paced replays keep producing poses at
+// the frame rate, without waiting for it.
+TEST(Solver, UnpluggedCharacterDoesNotStallTheOthers)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    mocap_solver_config sc;
+    mocap_solver_config_defaults(&sc);
+    sc.require_calibration = 0;  // live + paced replays: no time for calibration preludes here
+    Sessions sessions;           // declared first: the solver closes before its sessions
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, &sc, &solver.s), MOCAP_OK);
+
+    std::string dir = test_temp_dir();
+    FakeReceiver receiver(dir + "/ttyLive");
+    mocap_session_config live;
+    mocap_config_defaults(&live);
+    live.source_kind = MOCAP_SOURCE_SERIAL;
+    snprintf(live.path, sizeof live.path, "%s", receiver.link.c_str());
+    mocap_session *ls = nullptr;
+    ASSERT_EQ(mocap_session_open(&live, &ls), MOCAP_OK) << mocap_last_error();
+    sessions.list.push_back(ls);
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, ls, &ch), MOCAP_OK);
+    for (int c = 1; c <= 2; ++c) {
+        std::string cap = dir + "/paced" + std::to_string(c) + ".cap";
+        synth_config cfg = short_capture(50 + c, 10.0, "walk", cap);
+        sessions.list.push_back(open_replay(cap, cfg, 1));
+        ASSERT_NE(sessions.list.back(), nullptr);
+        ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list.back(), &ch), MOCAP_OK);
+    }
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
+    for (auto *s : sessions.list) ASSERT_EQ(mocap_session_start(s), MOCAP_OK);
+
+    synth_config wcfg;
+    synth_config_defaults(&wcfg);
+    wcfg.seed = 55;
+    wcfg.motion_s = 20.0;
+    auto packets = generate(wcfg);
+    std::atomic<bool> stop{false}, plugged{true};
+    std::mutex master_lock;
+    std::thread writer([&] {
+        auto start = Clock::now();
+        for (size_t i = 0; i < packets.size() && !stop; ++i) {
+            std::this_thread::sleep_until(start + std::chrono::duration<double>(packets[i].info.t));
+            std::lock_guard<std::mutex> g(master_lock);
+            if (plugged) receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size());
+        }
+    });
+
+    std::vector<uint64_t> counts(3, 0);
+    std::vector<mocap_pose> buf(64), last(3);
+    auto pump = [&](double seconds) {
+        auto t0 = Clock::now();
+        while (seconds_since(t0) < seconds) {
+            for (int c = 0; c < 3; ++c) {
+                uint32_t n = 0;
+                mocap_solver_drain(solver.s, c, buf.data(), (uint32_t)buf.size(), &n);
+                for (uint32_t i = 0; i < n; ++i) {
+                    ASSERT_EQ(buf[i].sequence, counts[c] + i);
+                    ASSERT_TRUE(std::isfinite(buf[i].joint_rotations[0][0]));
+                }
+                counts[c] += n;
+                if (n > 0) last[c] = buf[n - 1];
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+    };
+    pump(1.5);
+    std::vector<uint64_t> before = counts;
+    EXPECT_GT(before[0], 40u) << "the live character produced poses before the unplug";
+    EXPECT_GT(before[1], 40u);
+    EXPECT_GT(before[2], 40u);
+    {
+        std::lock_guard<std::mutex> g(master_lock);
+        plugged = false;
+        receiver.unplug();
+    }
+    pump(0.5);  // the unplug is noticed; the live character's last held frames drain
+    std::vector<uint64_t> mid = counts;
+    pump(2.0);
+    stop = true;
+    writer.join();
+    // The replays kept their pace (60 poses/s, allow 20 % for a loaded machine) ...
+    for (int c = 1; c <= 2; ++c)
+        EXPECT_GT((double)(counts[c] - mid[c]), 0.8 * 60 * 2.0) << c;
+    // ... while the unplugged character produced nothing more.
+    EXPECT_EQ(counts[0], mid[0]);
+    mocap_session_stats ss;
+    mocap_session_get_stats(ls, &ss);
+    EXPECT_EQ(ss.connection_state, MOCAP_CONNECTION_DISCONNECTED);
+    solver_stats st;
+    solver_get_stats(solver.s, -1, &st);
+    EXPECT_EQ(st.poses_dropped, 0u);
+    // Live poses are stamped on the monotonic clock: receive <= frame <= pose <= now.
+    EXPECT_LE(last[0].newest_receive_ns, last[0].frame_emitted_ns);
+    EXPECT_LE(last[0].frame_emitted_ns, last[0].pose_emitted_ns);
+    EXPECT_LE(last[0].pose_emitted_ns, mocap_monotonic_ns());
+    EXPECT_LT(last[0].pose_emitted_ns - last[0].frame_emitted_ns, 200000000LL);  // < 200 ms
+}
+
+// NaN/Inf in a frame: the frame is not fed to the model, the previous pose is held and flagged,
+// and the recurrent state never sees it.
+TEST(Solver, NonFiniteInputFramesAreNotFed)
+{
+    mocap_frame f;
+    memset(&f, 0, sizeof f);
+    f.flags = MOCAP_FRAME_CALIBRATED | MOCAP_FRAME_COMPLETE;
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        double q[4], axis[3] = {0.3, 1.0, -0.2};
+        quat_from_axis_angle(q, axis, 0.2 * (s + 1));
+        quat_normalize(q);
+        for (int k = 0; k < 4; ++k) f.sensors[s].bone_orientation[k] = (float)q[k];
+        for (int k = 0; k < 3; ++k) f.sensors[s].bone_acceleration[k] = 0.5f * (k + 1) - s;
+    }
+    float ori[54], acc[18];
+    ASSERT_EQ(solver_frame_input(&f, ori, acc), 0);
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        double q[4], m[9];
+        for (int k = 0; k < 4; ++k) q[k] = f.sensors[s].bone_orientation[k];
+        quat_to_mat3(m, q);
+        for (int k = 0; k < 9; ++k) EXPECT_NEAR(ori[s * 9 + k], m[k], 1e-6);
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(acc[s * 3 + k], f.sensors[s].bone_acceleration[k]);
+    }
+    mocap_frame bad = f;
+    bad.sensors[4].bone_orientation[2] = NAN;
+    EXPECT_EQ(solver_frame_input(&bad, ori, acc), -1);
+    bad = f;
+    bad.sensors[0].bone_acceleration[1] = INFINITY;
+    EXPECT_EQ(solver_frame_input(&bad, ori, acc), -1);
+    bad = f;
+    memset(bad.sensors[5].bone_orientation, 0, sizeof bad.sensors[5].bone_orientation);
+    EXPECT_EQ(solver_frame_input(&bad, ori, acc), -1);
+
+    // Through the solver's tick (no thread: solver_prepare + solver_solve).
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = test_temp_path("nan.cap");
+    synth_config cfg = short_capture(60, 1.0, "walk", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));  // never started: only its rate is used
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK);
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
+    ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
+
+    std::vector<mocap_frame> frames(6, f);
+    frames[2].sensors[3].bone_acceleration[0] = NAN;
+    frames[3].sensors[1].bone_orientation[0] = INFINITY;
+    frames[5].flags = 0;  // not calibrated: skipped
+    for (size_t i = 0; i < frames.size(); ++i) {
+        frames[i].sequence = i;
+        frames[i].time_s = 10.0 + i / 60.0;
+        const mocap_frame *fp = &frames[i];
+        ASSERT_EQ(solver_solve(solver.s, &ch, &fp, nullptr, 1), MOCAP_OK) << mocap_last_error();
+    }
+    std::vector<mocap_pose> poses(16);
+    uint32_t n = 0;
+    ASSERT_EQ(mocap_solver_drain(solver.s, 0, poses.data(), (uint32_t)poses.size(), &n), MOCAP_OK);
+    ASSERT_EQ(n, 5u);
+    solver_stats st;
+    solver_get_stats(solver.s, 0, &st);
+    EXPECT_EQ(st.frames_nonfinite, 2u);
+    EXPECT_EQ(st.frames_uncalibrated, 1u);
+    EXPECT_EQ(st.frames_solved, 3u);
+    for (uint32_t i = 0; i < n; ++i) {
+        EXPECT_EQ(poses[i].sequence, i);
+        EXPECT_EQ(poses[i].frame_sequence, i);
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j)
+            for (int k = 0; k < 4; ++k) ASSERT_TRUE(std::isfinite(poses[i].joint_rotations[j][k]));
+        for (int k = 0; k < 3; ++k) ASSERT_TRUE(std::isfinite(poses[i].root_position[k]));
+    }
+    // Frames 2 and 3 hold pose 1 (flagged incomplete), frame 4 is solved again.
+    for (int i : {2, 3}) {
+        EXPECT_TRUE(poses[i].flags & MOCAP_POSE_INCOMPLETE) << i;
+        EXPECT_EQ(0, memcmp(poses[i].joint_rotations, poses[1].joint_rotations, sizeof poses[1].joint_rotations));
+        EXPECT_EQ(0, memcmp(poses[i].root_position, poses[1].root_position, sizeof poses[1].root_position));
+    }
+    EXPECT_FALSE(poses[4].flags & MOCAP_POSE_INCOMPLETE);
+
+    // The state after the NaN frames equals the state of a clean run of the 3 good frames: a
+    // second character-free check through a fresh solver fed only frames 0, 1, 4.
+    Solver clean;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &clean.s), MOCAP_OK);
+    ASSERT_EQ(mocap_solver_add_character(clean.s, sessions.list[0], &ch), MOCAP_OK);
+    ASSERT_EQ(solver_prepare(clean.s), MOCAP_OK);
+    for (int i : {0, 1, 4}) {
+        const mocap_frame *fp = &frames[i];
+        ASSERT_EQ(solver_solve(clean.s, &ch, &fp, nullptr, 1), MOCAP_OK);
+    }
+    std::vector<mocap_pose> ref(4);
+    ASSERT_EQ(mocap_solver_drain(clean.s, 0, ref.data(), (uint32_t)ref.size(), &n), MOCAP_OK);
+    ASSERT_EQ(n, 3u);
+    EXPECT_EQ(0, memcmp(ref[2].joint_rotations, poses[4].joint_rotations, sizeof ref[2].joint_rotations));
+    EXPECT_EQ(0, memcmp(ref[2].foot_contact, poses[4].foot_contact, sizeof ref[2].foot_contact));
+}
+
+TEST(Solver, ConfigIsValidated)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    mocap_solver_config c;
+    mocap_solver_config_defaults(&c);
+    EXPECT_EQ(c.struct_size, sizeof c);
+    EXPECT_FLOAT_EQ(c.contact_threshold, 0.5f);
+    EXPECT_EQ(c.drift_correction, 1);
+    EXPECT_EQ(c.require_calibration, 1);
+    mocap_solver *s = nullptr;
+    c.contact_threshold = 1.5f;
+    EXPECT_EQ(mocap_solver_open(model.m, &c, &s), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("contact_threshold"), std::string::npos);
+    mocap_solver_config_defaults(&c);
+    c.struct_size = 8;
+    EXPECT_EQ(mocap_solver_open(model.m, &c, &s), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(s, nullptr);
+    EXPECT_EQ(mocap_solver_open(nullptr, nullptr, &s), MOCAP_ERR_INVALID_ARGUMENT);
+    mocap_solver_close(nullptr);
+    mocap_model_close(nullptr);
+}
+
+// Bindings verify their mirrors against mocap_struct_layout: the solver's structs are in it.
+TEST(Solver, StructLayoutTableHasTheSolverStructs)
+{
+    uint32_t n = 0;
+    const mocap_field_layout *rows = mocap_struct_layout(&n);
+    auto find = [&](const char *s, const char *f) -> const mocap_field_layout * {
+        for (uint32_t i = 0; i < n; ++i)
+            if (std::string(rows[i].struct_name) == s && std::string(rows[i].field_name) == f) return &rows[i];
+        return nullptr;
+    };
+    struct Row {
+        const char *s, *f;
+        size_t offset, size;
+    } expected[] = {
+        {"mocap_pose", "", 0, sizeof(mocap_pose)},
+        {"mocap_pose", "joint_rotations", offsetof(mocap_pose, joint_rotations), 24 * 4 * 4},
+        {"mocap_pose", "pose_emitted_ns", offsetof(mocap_pose, pose_emitted_ns), 8},
+        {"mocap_model_info", "", 0, sizeof(mocap_model_info)},
+        {"mocap_model_info", "joint_names", offsetof(mocap_model_info, joint_names), 24 * 32},
+        {"mocap_model_options", "onnxruntime_path", offsetof(mocap_model_options, onnxruntime_path), MOCAP_PATH_MAX},
+        {"mocap_solver_config", "require_calibration", offsetof(mocap_solver_config, require_calibration), 4},
+    };
+    for (const auto &e : expected) {
+        const mocap_field_layout *r = find(e.s, e.f);
+        ASSERT_NE(r, nullptr) << e.s << "." << e.f;
+        EXPECT_EQ(r->offset, e.offset) << e.s << "." << e.f;
+        EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
+    }
+    EXPECT_EQ(mocap_api_version(), 2);
+}
