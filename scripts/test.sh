@@ -4,6 +4,8 @@
 #   fuzz:         the HiPNUC decoder under libFuzzer for a bounded time
 #   dotnet:       the C# core's NUnit tests against the real native library
 #   python:       pytest over training/ (when it has tests)
+#   unity package: pytest over scripts/tests (.meta generator and package linter, incl. a lint
+#                 of the real package: run scripts/unity_meta.py after adding files)
 # Environment: MOCAP_FUZZ_SECONDS (default 60), MOCAP_SKIP_SANITIZERS=1 for a quick local run.
 set -uo pipefail
 
@@ -108,6 +110,17 @@ if [ -d "$ROOT/training/tests" ]; then
   f="$(grep -Eo '[0-9]+ (failed|error)' "$log" | awk '{s+=$1} END {print s+0}')"
   if [ "$p" = "0" ] && [ "$f" = "0" ]; then f=1; fi
   record "python (training)" "$p" "$f"
+fi
+
+if [ -d "$ROOT/scripts/tests" ]; then
+  echo "=== unity package: .meta files, package linter (pytest scripts/tests)"
+  /usr/bin/python3 "$ROOT/scripts/package_lint.py" || true # the problems, file by file
+  log="$BUILD/pytest-scripts.log"
+  (cd "$ROOT" && /usr/bin/python3 -m pytest -q scripts/tests) 2>&1 | tee "$log"
+  p="$(grep -Eo '[0-9]+ passed' "$log" | tail -1 | grep -Eo '[0-9]+' || echo 0)"
+  f="$(grep -Eo '[0-9]+ (failed|error)' "$log" | awk '{s+=$1} END {print s+0}')"
+  if [ "$p" = "0" ] && [ "$f" = "0" ]; then f=1; fi
+  record "unity package (lint)" "$p" "$f"
 fi
 
 echo

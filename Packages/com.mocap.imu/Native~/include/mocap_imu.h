@@ -435,6 +435,93 @@ MOCAP_API mocap_status mocap_solver_drain(mocap_solver *solver, int32_t characte
 MOCAP_API mocap_status mocap_solver_reset_character(mocap_solver *solver, int32_t character);
 
 /* ------------------------------------------------------------------------------------------ */
+/* Streaming and export: VMC protocol (OSC over UDP) and BVH files                              */
+/* ------------------------------------------------------------------------------------------ */
+/* VMC sender: one handle per character and destination. Each sent pose is ONE OSC bundle:
+ *   /VMC/Ext/OK i(1) [i(calibration_state) i(0)]   loaded (+ calibrated, normal mode)
+ *   /VMC/Ext/T f(pose time_s)
+ *   /VMC/Ext/Root/Pos s("root") f(px py pz qx qy qz qw)
+ *   /VMC/Ext/Bone/Pos s(bone) f(px py pz qx qy qz qw)   for each of the 22 mapped joints
+ * Bones are named by Unity's HumanBodyBones: pelvis Hips, spine1 Spine, spine2 Chest, spine3
+ * UpperChest, neck Neck, head Head, left/right_collar Left/RightShoulder, _shoulder UpperArm,
+ * _elbow LowerArm, _wrist Hand, _hip UpperLeg, _knee LowerLeg, _ankle Foot, _foot Toes (the SMPL
+ * left/right_hand joints have no bone). Coordinates are Unity's (left-handed, Y up, metres): the
+ * model frame mirrored on X, position (x,y,z) -> (-x,y,z), quaternion (w,x,y,z) -> Unity
+ * (x,-y,-z,w), sent in VMC's qx qy qz qw order.
+ * Bone/Pos carries LOCAL transforms: each bone's rest offset from its parent (Unity coords) and
+ * its local rotation. The avatar root ("root", the parent of Hips) stands on the floor under the
+ * pelvis: Root/Pos = (pelvis world position - pelvis rest offset, identity rotation) and Hips =
+ * (pelvis rest offset (0, pelvis height, 0), global pelvis rotation), so Root * Hips is exactly
+ * the pelvis world pose; a receiver that ignores Root still gets the full body orientation, and
+ * one that applies Root (root synchronisation) also gets the locomotion - no rotation is applied
+ * twice. */
+typedef struct mocap_vmc_options {
+    uint32_t struct_size;
+    float max_rate_hz;          /* at most this many bundles per second of pose time (default 60;
+                                   <= 0: every pose). SlimeVR caps near 200 */
+    int32_t allow_remote;       /* 0 (default): only loopback destinations; 1: any address */
+    int32_t calibration_state;  /* sent in /VMC/Ext/OK: 3 (default) = calibrated; -1: send only
+                                   /VMC/Ext/OK 1 */
+} mocap_vmc_options;
+
+typedef struct mocap_vmc_stats {
+    uint64_t poses;             /* mocap_vmc_send_pose calls with a valid pose */
+    uint64_t bundles_sent;
+    uint64_t skipped_rate;      /* poses skipped by max_rate_hz */
+    uint64_t send_failures;     /* datagrams the OS refused */
+    uint64_t bytes_sent;
+    uint32_t bones_per_bundle;  /* Bone/Pos messages in the last bundle */
+    uint32_t last_bundle_size;  /* bytes */
+} mocap_vmc_stats;
+
+typedef struct mocap_vmc mocap_vmc;
+
+/* Any thread. */
+MOCAP_API mocap_status mocap_vmc_options_defaults(mocap_vmc_options *options);
+/* destination: "host:port", "[v6]:port", "host", or NULL/"" = "127.0.0.1:39539". Resolved once.
+ * A non-loopback destination is refused (MOCAP_ERR_PERMISSION) unless options->allow_remote;
+ * a bad one fails naming it. Nothing listens: the socket only sends, and for a loopback
+ * destination it is bound to loopback. options may be NULL. One thread per handle. */
+MOCAP_API mocap_status mocap_vmc_open(const char *destination, const mocap_vmc_options *options,
+                                      mocap_vmc **out);
+/* Sends one pose as one bundle (no allocation). MOCAP_ERR_NO_DATA when the rate cap skipped it
+ * (not a failure); MOCAP_ERR_IO when the OS refused the datagram. info is the model's
+ * (joint names, parents, rest offsets); joints are found by their SMPL names. */
+MOCAP_API mocap_status mocap_vmc_send_pose(mocap_vmc *vmc, const mocap_model_info *info,
+                                           const mocap_pose *pose);
+MOCAP_API mocap_status mocap_vmc_get_stats(const mocap_vmc *vmc, mocap_vmc_stats *out);
+/* NULL accepted. */
+MOCAP_API void mocap_vmc_close(mocap_vmc *vmc);
+
+/* BVH writer of solved poses (the same writer as `mocapctl replay --out`): SMPL-24 skeleton from
+ * the model info, metres, model frame, Euler angles continuous between frames; streaming and
+ * crash-safe (the frame count in the header is rewritten at every flush). */
+typedef enum mocap_bvh_rotation_order {
+    MOCAP_BVH_ZXY = 0,  /* "Zrotation Xrotation Yrotation" (default) */
+    MOCAP_BVH_XYZ = 1
+} mocap_bvh_rotation_order;
+
+typedef struct mocap_bvh_options {
+    uint32_t struct_size;
+    int32_t rotation_order;  /* mocap_bvh_rotation_order */
+    float frame_rate;        /* Frame Time = 1 / frame_rate; 0 (default): the model's frame rate */
+    uint32_t flush_every;    /* frames between flushes + header updates (default 1) */
+} mocap_bvh_options;
+
+typedef struct mocap_bvh_writer mocap_bvh_writer;
+
+/* Any thread. */
+MOCAP_API mocap_status mocap_bvh_options_defaults(mocap_bvh_options *options);
+/* Creates (truncates) path and writes the header. options may be NULL. One thread per writer. */
+MOCAP_API mocap_status mocap_bvh_open(const char *path, const mocap_model_info *info,
+                                      const mocap_bvh_options *options, mocap_bvh_writer **out);
+/* Appends pose->root_position and pose->joint_rotations as one frame. */
+MOCAP_API mocap_status mocap_bvh_append(mocap_bvh_writer *writer, const mocap_pose *pose);
+MOCAP_API uint64_t mocap_bvh_frames(const mocap_bvh_writer *writer);
+/* Flushes, writes the final frame count and closes; returns the first write error. NULL ok. */
+MOCAP_API mocap_status mocap_bvh_close(mocap_bvh_writer *writer);
+
+/* ------------------------------------------------------------------------------------------ */
 /* Layout description, so bindings in other languages can verify their struct mirrors.          */
 /* ------------------------------------------------------------------------------------------ */
 typedef struct mocap_field_layout {

@@ -138,6 +138,27 @@ static const mocap_field_layout layout_table[] = {
     FIELD_ROW(mocap_pose, newest_receive_ns),
     FIELD_ROW(mocap_pose, frame_emitted_ns),
     FIELD_ROW(mocap_pose, pose_emitted_ns),
+
+    STRUCT_ROW(mocap_vmc_options),
+    FIELD_ROW(mocap_vmc_options, struct_size),
+    FIELD_ROW(mocap_vmc_options, max_rate_hz),
+    FIELD_ROW(mocap_vmc_options, allow_remote),
+    FIELD_ROW(mocap_vmc_options, calibration_state),
+
+    STRUCT_ROW(mocap_vmc_stats),
+    FIELD_ROW(mocap_vmc_stats, poses),
+    FIELD_ROW(mocap_vmc_stats, bundles_sent),
+    FIELD_ROW(mocap_vmc_stats, skipped_rate),
+    FIELD_ROW(mocap_vmc_stats, send_failures),
+    FIELD_ROW(mocap_vmc_stats, bytes_sent),
+    FIELD_ROW(mocap_vmc_stats, bones_per_bundle),
+    FIELD_ROW(mocap_vmc_stats, last_bundle_size),
+
+    STRUCT_ROW(mocap_bvh_options),
+    FIELD_ROW(mocap_bvh_options, struct_size),
+    FIELD_ROW(mocap_bvh_options, rotation_order),
+    FIELD_ROW(mocap_bvh_options, frame_rate),
+    FIELD_ROW(mocap_bvh_options, flush_every),
 };
 
 const mocap_field_layout *mocap_struct_layout(uint32_t *count)

@@ -11,6 +11,9 @@
  *                    default model: the shipped fp32 one)
  *   mocapctl live    --port DEV [--baud 460800] [--record CAPTURE] [--seconds N] [--model M | --pose]
  *   mocapctl record  --port DEV --out CAPTURE [--baud 460800] [--seconds N]
+ *   mocapctl stream  --vmc HOST:PORT [--vmc HOST2:PORT2 ...] (--replay CAPTURE [--replay C2 ...]
+ *                    [--realtime] [--speed X] | --port DEV [--baud B]) [--model M] [--rate HZ]
+ *                    [--seconds S] [--allow-remote]   (poses -> VMC protocol, character i -> i-th --vmc)
  *   mocapctl bench   decode [--seconds S]
  *   mocapctl bench   pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]
  *                    [--tip-model F] [--max-characters N]                     (tools/bench.c)
@@ -46,6 +49,7 @@
 
 static int csv_first_row_columns(const char *path);
 static int cmd_replay_pose(int argc, char **argv);
+static int cmd_stream(int argc, char **argv);
 
 int mocapctl_onnx(const char *cmd, int argc, char **argv); /* tools/infer.c */
 
@@ -65,6 +69,9 @@ static int usage(void)
             "                 [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
             "  mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
             "  mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S]\n"
+            "  mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...] [--realtime]\n"
+            "                 [--speed X] | --port DEV [--baud B]) [--model M] [--rate HZ] [--seconds S]\n"
+            "                 [--allow-remote]\n"
             "  mocapctl bench decode [--seconds S]\n"
             "  mocapctl bench pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]\n"
             "                 [--tip-model F] [--max-characters N]\n"
@@ -1468,6 +1475,183 @@ static int cmd_record(int argc, char **argv)
 }
 
 /* ---------------------------------------------------------------------------------------- */
+/* stream: poses -> VMC protocol (OSC over UDP), character i -> the i-th --vmc destination      */
+
+#define STREAM_MAX 16
+
+/* Every value of a repeated option, in order. */
+static int arg_values(int argc, char **argv, const char *name, const char **out, int cap)
+{
+    int n = 0;
+    for (int i = 0; i + 1 < argc; ++i) {
+        if (strcmp(argv[i], name) == 0) {
+            if (n == cap) return -1;
+            out[n++] = argv[++i];
+        }
+    }
+    return n;
+}
+
+static int cmd_stream(int argc, char **argv)
+{
+    const char *dests[STREAM_MAX], *replays[STREAM_MAX];
+    int ndest = arg_values(argc, argv, "--vmc", dests, STREAM_MAX);
+    int nrep = arg_values(argc, argv, "--replay", replays, STREAM_MAX);
+    const char *port = arg_value(argc, argv, "--port");
+    const char *rate = arg_value(argc, argv, "--rate");
+    const char *seconds = arg_value(argc, argv, "--seconds");
+    const char *speed = arg_value(argc, argv, "--speed");
+    const char *prelude = arg_value(argc, argv, "--prelude");
+    if (ndest < 0 || nrep < 0) {
+        fprintf(stderr, "mocapctl: at most %d --vmc and --replay\n", STREAM_MAX);
+        return 2;
+    }
+    if (ndest == 0 || (nrep == 0) == (port == NULL)) {
+        fprintf(stderr, "mocapctl stream: give --vmc HOST:PORT (e.g. 127.0.0.1:39539) and either "
+                        "--replay CAPTURE or --port DEV\n");
+        return usage();
+    }
+    const int characters = port ? 1 : nrep;
+    if (ndest != characters) {
+        fprintf(stderr, "mocapctl stream: %d character(s) but %d --vmc destination(s): character i "
+                        "goes to the i-th --vmc\n", characters, ndest);
+        return 2;
+    }
+    mocap_vmc_options vopt;
+    mocap_vmc_options_defaults(&vopt);
+    if (rate) vopt.max_rate_hz = (float)atof(rate);
+    vopt.allow_remote = arg_flag(argc, argv, "--allow-remote");
+
+    int rc = 1;
+    mocap_model *model = NULL;
+    mocap_model_info info;
+    mocap_solver *solver = NULL;
+    mocap_session *sessions[STREAM_MAX] = {0};
+    mocap_vmc *vmc[STREAM_MAX] = {0};
+    int32_t ids[STREAM_MAX];
+    int ended[STREAM_MAX] = {0};
+    mocap_pose *poses = NULL;
+    mocap_status s;
+
+    /* Destinations first: a bad one fails before anything is loaded. */
+    for (int i = 0; i < ndest; ++i) {
+        s = mocap_vmc_open(dests[i], &vopt, &vmc[i]);
+        if (s != MOCAP_OK) {
+            rc = fail(s, "VMC destination");
+            goto done;
+        }
+    }
+    if (open_model(arg_value(argc, argv, "--model"), &model, &info) != 0) goto done;
+    poses = (mocap_pose *)malloc(POSE_DRAIN * sizeof *poses);
+    if (!poses) goto done;
+
+    if (port) {
+        if (open_live(argc, argv, NULL, info.frame_rate, &sessions[0]) != 0) goto done;
+        int cal = guided_step(sessions[0], MOCAP_CALIBRATION_HEADING,
+                              "Heading step: lay all six sensors still on a flat surface, X axis "
+                              "(the arrow) pointing where you will face, Z up.", 3.0f);
+        if (cal == 0)
+            cal = guided_step(sessions[0], MOCAP_CALIBRATION_TPOSE,
+                              "T-pose step: strap the sensors on, face the same way, arms straight "
+                              "out to the sides, stand still.", 3.0f);
+        if (cal != 0) goto done;
+    } else {
+        double heading_s = 3.0, strap_s = 2.0, tpose_s = 3.0;
+        if (prelude && sscanf(prelude, "%lf,%lf,%lf", &heading_s, &strap_s, &tpose_s) != 3) {
+            fprintf(stderr, "mocapctl: --prelude wants HEADING,STRAP,TPOSE seconds\n");
+            goto done;
+        }
+        for (int i = 0; i < nrep; ++i) {
+            mocap_session_config cfg;
+            mocap_config_defaults(&cfg);
+            cfg.source_kind = MOCAP_SOURCE_REPLAY;
+            snprintf(cfg.path, sizeof cfg.path, "%s", replays[i]);
+            cfg.replay_realtime = arg_flag(argc, argv, "--realtime") || speed != NULL;
+            if (speed) cfg.replay_speed = (float)atof(speed);
+            cfg.output_rate_hz = info.frame_rate;
+            double t0 = 0;
+            if (first_capture_time(replays[i], &t0) != 0) goto done;
+            s = mocap_session_open(&cfg, &sessions[i]);
+            if (s == MOCAP_OK)
+                s = mocap_calibration_schedule(sessions[i], MOCAP_CALIBRATION_HEADING, t0 + 0.5,
+                                               (float)(heading_s - 1.0));
+            if (s == MOCAP_OK)
+                s = mocap_calibration_schedule(sessions[i], MOCAP_CALIBRATION_TPOSE,
+                                               t0 + heading_s + strap_s + 0.5, (float)(tpose_s - 1.0));
+            if (s != MOCAP_OK) {
+                rc = fail(s, replays[i]);
+                goto done;
+            }
+        }
+    }
+    s = mocap_solver_open(model, NULL, &solver);
+    for (int i = 0; s == MOCAP_OK && i < characters; ++i)
+        s = mocap_solver_add_character(solver, sessions[i], &ids[i]);
+    if (s == MOCAP_OK) s = mocap_solver_start(solver);
+    for (int i = 0; !port && s == MOCAP_OK && i < characters; ++i) s = mocap_session_start(sessions[i]);
+    if (s != MOCAP_OK) {
+        rc = fail(s, "starting the solver");
+        goto done;
+    }
+    for (int i = 0; i < characters; ++i)
+        printf("character %d (%s) -> VMC %s, at most %g bundles/s\n", i, port ? port : replays[i],
+               dests[i], (double)vopt.max_rate_hz);
+    fflush(stdout);
+
+    const double limit = seconds ? atof(seconds) : 1e30;
+    const int64_t start = mocap_monotonic_ns();
+    uint64_t send_errors = 0;
+    int running = characters;
+    while (running > 0 && !interrupted &&
+           (double)(mocap_monotonic_ns() - start) * 1e-9 < limit) {
+        uint32_t total = 0;
+        for (int i = 0; i < characters; ++i) {
+            if (ended[i]) continue;
+            uint32_t n = 0;
+            s = mocap_solver_drain(solver, ids[i], poses, POSE_DRAIN, &n);
+            for (uint32_t k = 0; k < n; ++k) {
+                mocap_status vs = mocap_vmc_send_pose(vmc[i], &info, &poses[k]);
+                if (vs != MOCAP_OK && vs != MOCAP_ERR_NO_DATA && send_errors++ < 5)
+                    fprintf(stderr, "mocapctl: %s\n", mocap_last_error());
+            }
+            total += n;
+            if (s == MOCAP_ERR_END_OF_STREAM) {
+                ended[i] = 1;
+                running--;
+            } else if (s != MOCAP_OK && s != MOCAP_ERR_NO_DATA) {
+                rc = fail(s, "solving");
+                goto done;
+            }
+        }
+        if (total == 0) mocap_sleep_ms(1);
+    }
+    rc = 0;
+    for (int i = 0; i < characters; ++i) {
+        mocap_vmc_stats st;
+        mocap_vmc_get_stats(vmc[i], &st);
+        printf("character %d -> %s: %llu poses, %llu bundles sent (%u bones each, %u bytes), "
+               "%llu skipped by the rate cap, %llu send failures\n",
+               i, dests[i], (unsigned long long)st.poses, (unsigned long long)st.bundles_sent,
+               st.bones_per_bundle, st.last_bundle_size, (unsigned long long)st.skipped_rate,
+               (unsigned long long)st.send_failures);
+        if (st.bundles_sent == 0) {
+            fprintf(stderr, "mocapctl: character %d: nothing was sent (calibration refused or the "
+                            "capture ended before it finished)\n", i);
+            rc = 1;
+        }
+    }
+done:
+    if (solver) mocap_solver_close(solver);
+    for (int i = 0; i < STREAM_MAX; ++i) {
+        if (sessions[i]) mocap_session_close(sessions[i]);
+        mocap_vmc_close(vmc[i]);
+    }
+    if (model) mocap_model_close(model);
+    free(poses);
+    return rc;
+}
+
+/* ---------------------------------------------------------------------------------------- */
 
 int main(int argc, char **argv)
 {
@@ -1478,6 +1662,7 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "replay") == 0) return cmd_replay(argc - 2, argv + 2);
     if (strcmp(cmd, "live") == 0) return cmd_live(argc - 2, argv + 2);
     if (strcmp(cmd, "record") == 0) return cmd_record(argc - 2, argv + 2);
+    if (strcmp(cmd, "stream") == 0) return cmd_stream(argc - 2, argv + 2);
     if (strcmp(cmd, "infer") == 0 || strcmp(cmd, "model-info") == 0) return mocapctl_onnx(cmd, argc - 2, argv + 2);
     if (strcmp(cmd, "bench") == 0) {
         if (argc < 3) return usage();

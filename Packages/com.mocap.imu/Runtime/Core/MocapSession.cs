@@ -27,9 +27,10 @@ namespace Mocap.Imu
     /// managed code, so no Unity code runs off the main thread.</para>
     /// <para>Allocation: <see cref="PollLatest"/>, <see cref="Drain"/>, <see cref="GetStats"/> and
     /// the report getters allocate nothing; exceptions and the string properties do.</para>
-    /// <para>The pose model, its execution provider and characters (a later issue) are separate
-    /// objects that consume this session's <see cref="MocapFrame"/>s, so one session can feed a
-    /// character and several sessions can feed several characters.</para>
+    /// <para>The pose model (<see cref="MocapModel"/>) and its characters (<see cref="MocapSolver"/>)
+    /// are separate objects: a session added to a solver as a character feeds it its frames
+    /// (polling, draining or stopping the session then throws until the solver is disposed), and
+    /// several sessions feed several characters.</para>
     /// </remarks>
     public sealed class MocapSession : IDisposable
     {
@@ -106,6 +107,10 @@ namespace Mocap.Imu
         public void Stop()
         {
             if (_handle == null) return;
+            // The solver holds the native session: closing it here would only be deferred, and a
+            // later Start would open a new one the solver never sees.
+            if (ConsumingSolver != null)
+                throw new InvalidOperationException("a MocapSolver consumes this session: dispose the solver first");
             _stoppedCalibration = Calibration;
             _handle.Dispose();
             _handle = null;
@@ -133,6 +138,7 @@ namespace Mocap.Imu
         /// </summary>
         public unsafe MocapPollResult PollLatest(ref MocapFrame frame)
         {
+            ThrowIfConsumed();
             MocapFrame latest;
             var status = NativeMethods.mocap_session_poll_latest(Handle, &latest);
             if (status == MocapStatus.Ok)
@@ -151,6 +157,7 @@ namespace Mocap.Imu
         public unsafe MocapPollResult Drain(Span<MocapFrame> destination, out int count)
         {
             count = 0;
+            ThrowIfConsumed();
             if (destination.Length == 0)
                 throw new ArgumentException("the destination holds no frames", nameof(destination));
             uint n = 0;
@@ -240,6 +247,19 @@ namespace Mocap.Imu
                     throw new InvalidOperationException("the session is stopped; Start() reopens it");
                 return _handle;
             }
+        }
+
+        /// <summary>The solver this session feeds as a character (it then owns the frames), or null.</summary>
+        internal MocapSolver ConsumingSolver { get; set; }
+
+        /// <summary>The native handle, for the solver to reference (throws when stopped or disposed).</summary>
+        internal SessionHandle NativeHandle => Handle;
+
+        void ThrowIfConsumed()
+        {
+            if (ConsumingSolver != null)
+                throw new InvalidOperationException(
+                    "a MocapSolver consumes this session's frames: poll or drain the solver instead");
         }
 
         void ThrowIfDisposed()

@@ -23,10 +23,19 @@ namespace Mocap.Imu.Tests
         public double HeadingSeconds = 3, StrapSeconds = 2, TPoseSeconds = 3;
     }
 
+    /// <summary>What `mocapctl replay CAPTURE --model M --json J --out B` wrote.</summary>
+    internal sealed class PoseReplay
+    {
+        public string JsonPath;
+        public string BvhPath;
+        public string BvhOrder;
+    }
+
     internal static class TestPaths
     {
         static string _tempRoot;
         static readonly Dictionary<string, SynthCapture> Captures = new Dictionary<string, SynthCapture>();
+        static readonly Dictionary<string, PoseReplay> PoseReplays = new Dictionary<string, PoseReplay>();
 
         /// <summary>The repository root: the folder holding Packages/com.mocap.imu/Native~.</summary>
         public static string RepoRoot
@@ -70,6 +79,45 @@ namespace Mocap.Imu.Tests
             }
         }
 
+        /// <summary>
+        /// The pose model the package ships: $MOCAP_MODEL, else
+        /// Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx. The engine finds ONNX
+        /// Runtime itself (the path compiled in, or $MOCAP_ONNXRUNTIME_PATH).
+        /// </summary>
+        public static string ModelPath
+        {
+            get
+            {
+                var fromEnv = Environment.GetEnvironmentVariable("MOCAP_MODEL");
+                var path = !string.IsNullOrEmpty(fromEnv)
+                    ? fromEnv
+                    : RepoRoot == null ? null : Path.Combine(RepoRoot, "Packages", "com.mocap.imu", "Runtime", "Models", "mocap_pose_fp32.onnx");
+                if (path == null || !File.Exists(path)) Assert.Fail($"the pose model was not found ({path ?? "no repository root"}); set MOCAP_MODEL");
+                return path;
+            }
+        }
+
+        /// <summary>
+        /// The engine's own pose replay of a capture through the model (JSON lines and BVH in the
+        /// given Euler order), run once per run and argument set.
+        /// </summary>
+        public static PoseReplay ReplayPoses(SynthCapture capture, string bvhOrder = "zxy")
+        {
+            var key = capture.CapturePath + "|" + bvhOrder;
+            if (PoseReplays.TryGetValue(key, out var cached) && File.Exists(cached.JsonPath)) return cached;
+            var dir = NewTempDirectory("poses");
+            var replay = new PoseReplay
+            {
+                JsonPath = Path.Combine(dir, "poses.jsonl"),
+                BvhPath = Path.Combine(dir, "poses.bvh"),
+                BvhOrder = bvhOrder,
+            };
+            RunMocapctl("replay", capture.CapturePath, "--model", ModelPath, "--json", replay.JsonPath,
+                        "--out", replay.BvhPath, "--bvh-order", bvhOrder);
+            PoseReplays[key] = replay;
+            return replay;
+        }
+
         /// <summary>Fails with a useful message when the native library cannot be loaded.</summary>
         public static void RequireEngine()
         {
@@ -102,6 +150,7 @@ namespace Mocap.Imu.Tests
             if (_tempRoot != null && Directory.Exists(_tempRoot)) Directory.Delete(_tempRoot, recursive: true);
             _tempRoot = null;
             Captures.Clear();
+            PoseReplays.Clear();
         }
 
         /// <summary>Run mocapctl; fails the test with its output when it exits non-zero.</summary>

@@ -1,0 +1,246 @@
+using System;
+using System.Collections.Generic;
+
+namespace Mocap.Imu
+{
+    /// <summary>
+    /// How a solver turns model outputs into poses (mocap_solver_config). A new instance holds the
+    /// engine's defaults.
+    /// </summary>
+    public sealed class SolverConfig
+    {
+        /// <summary>The engine's defaults (0.5 contact threshold, floor at 0, drift correction on,
+        /// only calibrated frames solved).</summary>
+        public unsafe SolverConfig()
+        {
+            MocapEngine.EnsureCompatible();
+            NativeSolverConfig native;
+            NativeMethods.Check(NativeSolverMethods.mocap_solver_config_defaults(&native));
+            ContactThreshold = native.ContactThreshold;
+            FloorHeight = native.FloorHeight;
+            DriftCorrection = native.DriftCorrection != 0;
+            RequireCalibration = native.RequireCalibration != 0;
+        }
+
+        /// <summary>Foot contact probability that counts as planted, 0..1.</summary>
+        public float ContactThreshold { get; set; }
+        /// <summary>Floor height, model frame, metres.</summary>
+        public float FloorHeight { get; set; }
+        /// <summary>Planted feet do not slide and stay on the floor.</summary>
+        public bool DriftCorrection { get; set; }
+        /// <summary>Only calibrated frames are solved.</summary>
+        public bool RequireCalibration { get; set; }
+
+        internal unsafe void ToNative(out NativeSolverConfig native)
+        {
+            native = default;
+            native.StructSize = (uint)sizeof(NativeSolverConfig);
+            native.ContactThreshold = ContactThreshold;
+            native.FloorHeight = FloorHeight;
+            native.DriftCorrection = DriftCorrection ? 1 : 0;
+            native.RequireCalibration = RequireCalibration ? 1 : 0;
+        }
+    }
+
+    /// <summary>
+    /// Runs a <see cref="MocapModel"/> for several characters, each fed by one
+    /// <see cref="MocapSession"/>, on the engine's inference thread (one batched inference per
+    /// tick), and hands out solved poses with root motion and contact-based drift correction.
+    /// </summary>
+    /// <remarks>
+    /// <para>Lifecycle: <see cref="Open"/>, <see cref="AddCharacter"/> for each session (before
+    /// <see cref="Start"/>; open each session with <see cref="SessionConfig.OutputRateHz"/> equal to
+    /// <see cref="ModelInfo.FrameRate"/>), <see cref="Start"/>, start the sessions (before or after),
+    /// then poll or drain poses per character. <see cref="Dispose"/> the solver first: the session
+    /// handles and the model handle are referenced by the solver's handle and close only after it,
+    /// so disposing them earlier is safe but defers their release.</para>
+    /// <para>A session added here belongs to the solver: polling or draining its frames, or
+    /// stopping it, throws until the solver is disposed.</para>
+    /// <para>Threads: poll and drain from one thread. Allocation: <see cref="PollLatest"/> and
+    /// <see cref="Drain"/> allocate nothing; exceptions do.</para>
+    /// </remarks>
+    public sealed class MocapSolver : IDisposable
+    {
+        /// <summary>Most characters one solver takes (MOCAP_MAX_CHARACTERS).</summary>
+        public const int MaxCharacters = NativeSolverMethods.MaxCharacters;
+
+        readonly SolverHandle _handle;
+        readonly List<MocapSession> _sessions = new List<MocapSession>();
+        // Per character: a poll or drain reported the end of its replay.
+        readonly bool[] _ended = new bool[MaxCharacters];
+        bool _started;
+        bool _disposed;
+
+        MocapSolver(MocapModel model, SolverHandle handle)
+        {
+            Model = model;
+            _handle = handle;
+        }
+
+        /// <summary>Create a solver for a model (its config defaults when <paramref name="config"/> is null).</summary>
+        /// <exception cref="MocapException">The engine refused the config; its text says why.</exception>
+        public static unsafe MocapSolver Open(MocapModel model, SolverConfig config = null)
+        {
+            if (model == null) throw new ArgumentNullException(nameof(model));
+            (config ?? new SolverConfig()).ToNative(out var native);
+            var modelHandle = model.Handle;
+            var handle = new SolverHandle();
+            // The reference comes first so the model cannot close between open and adoption.
+            handle.AddDependency(modelHandle);
+            IntPtr solver;
+            var status = NativeSolverMethods.mocap_solver_open(modelHandle, &native, out solver);
+            if (status != MocapStatus.Ok)
+            {
+                var failure = NativeMethods.Failure(status);
+                handle.RemoveLastDependency();
+                handle.Dispose();
+                throw failure;
+            }
+            handle.Adopt(solver);
+            return new MocapSolver(model, handle);
+        }
+
+        /// <summary>The model this solver runs.</summary>
+        public MocapModel Model { get; }
+
+        /// <summary>Characters added so far.</summary>
+        public int CharacterCount => _sessions.Count;
+
+        /// <summary>The inference thread is running.</summary>
+        public bool IsStarted => _started;
+
+        /// <summary>The session feeding a character.</summary>
+        public MocapSession GetSession(int character)
+        {
+            CheckCharacter(character);
+            return _sessions[character];
+        }
+
+        /// <summary>A poll or drain has reported that the character's replay is finished.</summary>
+        public bool IsEndOfStream(int character)
+        {
+            CheckCharacter(character);
+            return _ended[character];
+        }
+
+        /// <summary>
+        /// Add a character fed by <paramref name="session"/> (open, not yet consumed by another
+        /// solver). Returns its index: 0, 1, ...
+        /// </summary>
+        /// <exception cref="MocapException">The engine refused: started already, too many
+        /// characters, or the session's output rate differs from the model's frame rate.</exception>
+        public unsafe int AddCharacter(MocapSession session)
+        {
+            if (session == null) throw new ArgumentNullException(nameof(session));
+            var handle = Handle;
+            if (session.ConsumingSolver != null && session.ConsumingSolver != this)
+                throw new InvalidOperationException("the session already feeds another MocapSolver");
+            var sessionHandle = session.NativeHandle;
+            _handle.AddDependency(sessionHandle);
+            int character = -1;
+            var status = NativeSolverMethods.mocap_solver_add_character(handle, sessionHandle, &character);
+            if (status != MocapStatus.Ok)
+            {
+                var failure = NativeMethods.Failure(status);
+                _handle.RemoveLastDependency();
+                throw failure;
+            }
+            session.ConsumingSolver = this;
+            _sessions.Add(session);
+            return character;
+        }
+
+        /// <summary>Start the inference thread (start the sessions yourself, before or after).</summary>
+        public void Start()
+        {
+            NativeMethods.Check(NativeSolverMethods.mocap_solver_start(Handle));
+            _started = true;
+        }
+
+        /// <summary>
+        /// Copy the character's newest pose into <paramref name="pose"/>, skipping older ones.
+        /// <see cref="MocapPollResult.NoData"/>: nothing new (pose left as it was);
+        /// <see cref="MocapPollResult.EndOfStream"/>: its replay is finished and every pose was
+        /// taken. Allocates nothing.
+        /// </summary>
+        public unsafe MocapPollResult PollLatest(int character, ref MocapPose pose)
+        {
+            MocapStatus status;
+            // The engine writes only on success, so a NoData poll leaves the caller's pose intact.
+            fixed (MocapPose* p = &pose)
+                status = NativeSolverMethods.mocap_solver_poll_latest(Handle, character, p);
+            return Result(character, status);
+        }
+
+        /// <summary>
+        /// Copy the character's poses solved since the previous drain, oldest first, into
+        /// <paramref name="destination"/> (up to its length); <paramref name="count"/> receives how
+        /// many. Poses that do not fit stay queued. Allocates nothing.
+        /// </summary>
+        public unsafe MocapPollResult Drain(int character, Span<MocapPose> destination, out int count)
+        {
+            count = 0;
+            if (destination.Length == 0)
+                throw new ArgumentException("the destination holds no poses", nameof(destination));
+            uint n = 0;
+            MocapStatus status;
+            fixed (MocapPose* poses = destination)
+                status = NativeSolverMethods.mocap_solver_drain(Handle, character, poses,
+                                                                (uint)destination.Length, &n);
+            count = (int)n;
+            return Result(character, status);
+        }
+
+        /// <summary>
+        /// Clear a character's recurrent state and root motion (e.g. after a new calibration);
+        /// takes effect before its next frame. Any thread.
+        /// </summary>
+        public void ResetCharacter(int character)
+        {
+            NativeMethods.Check(NativeSolverMethods.mocap_solver_reset_character(Handle, character));
+        }
+
+        /// <summary>
+        /// Stop the inference thread and free the solver. The sessions and the model stay open
+        /// (their owners dispose them) and the sessions may be polled directly again.
+        /// </summary>
+        public void Dispose()
+        {
+            if (_disposed) return;
+            _disposed = true;
+            _handle.Dispose();
+            foreach (var session in _sessions)
+                if (session.ConsumingSolver == this) session.ConsumingSolver = null;
+            _started = false;
+        }
+
+        SolverHandle Handle
+        {
+            get
+            {
+                if (_disposed) throw new ObjectDisposedException(nameof(MocapSolver));
+                return _handle;
+            }
+        }
+
+        MocapPollResult Result(int character, MocapStatus status)
+        {
+            if (status == MocapStatus.Ok) return MocapPollResult.Frames;
+            if (status == MocapStatus.NoData) return MocapPollResult.NoData;
+            if (status == MocapStatus.EndOfStream)
+            {
+                _ended[character] = true;
+                return MocapPollResult.EndOfStream;
+            }
+            // Unknown characters are reported by the engine (its text names the index).
+            throw NativeMethods.Failure(status);
+        }
+
+        void CheckCharacter(int character)
+        {
+            if ((uint)character >= (uint)_sessions.Count)
+                throw new ArgumentOutOfRangeException(nameof(character), character,
+                    $"{_sessions.Count} character(s) added");
+        }
+    }
+}

@@ -1,0 +1,367 @@
+// The pose model and solver driven from C#, end to end through the real engine: a generated
+// capture's bytes -> calibrated frames -> the model on the engine's inference thread -> poses
+// drained into C# structs, compared pose by pose with the engine's own `mocapctl replay --json`.
+// The shipped model may be untrained, so structure is asserted, never accuracy.
+
+using System;
+using System.Collections.Generic;
+using System.Diagnostics;
+using System.IO;
+using Mocap.Imu.Maths;
+using Mocap.Imu.Recording;
+using Mocap.Imu.Skeleton;
+using NUnit.Framework;
+
+namespace Mocap.Imu.Tests
+{
+    /// <summary>Replays captures through MocapSession + MocapSolver from C#.</summary>
+    internal static class SolverReplay
+    {
+        /// <summary>A fast replay session of a synth capture with the prelude's calibration windows
+        /// scheduled as mocapctl replay schedules them.</summary>
+        public static MocapSession OpenCalibratedReplay(SynthCapture capture, float frameRate,
+                                                        bool realtime = false, float speed = 1f)
+        {
+            var config = SessionConfig.Replay(capture.CapturePath, realtime, speed);
+            config.OutputRateHz = frameRate;
+            var session = MocapSession.Open(config);
+            double t0 = Replay.FirstReceiveSeconds(capture.CapturePath);
+            session.ScheduleCalibration(CalibrationStep.Heading, t0 + 0.5, (float)(capture.HeadingSeconds - 1.0));
+            session.ScheduleCalibration(CalibrationStep.TPose,
+                t0 + capture.HeadingSeconds + capture.StrapSeconds + 0.5, (float)(capture.TPoseSeconds - 1.0));
+            return session;
+        }
+
+        /// <summary>Drains every character until each reports the end of its replay.</summary>
+        public static List<MocapPose>[] DrainAll(MocapSolver solver, int capacity = 32)
+        {
+            var poses = new List<MocapPose>[solver.CharacterCount];
+            for (int c = 0; c < poses.Length; c++) poses[c] = new List<MocapPose>();
+            var buffer = new MocapPose[capacity];
+            var watch = Stopwatch.StartNew();
+            for (;;)
+            {
+                bool allEnded = true, none = true;
+                for (int c = 0; c < poses.Length; c++)
+                {
+                    if (solver.IsEndOfStream(c)) continue;
+                    allEnded = false;
+                    var r = solver.Drain(c, buffer, out int count);
+                    for (int i = 0; i < count; i++) poses[c].Add(buffer[i]);
+                    none &= count == 0;
+                }
+                if (allEnded) return poses;
+                if (none) System.Threading.Thread.Sleep(1);
+                if (watch.Elapsed > TimeSpan.FromSeconds(90)) Assert.Fail("the replays did not end within 90 s");
+            }
+        }
+
+        /// <summary>Asserts a C# pose equals one of mocapctl's JSON poses (printed with 6 decimals).</summary>
+        public static void AssertSame(MocapPose expected, MocapPose actual, string where, float tolerance = 1e-5f)
+        {
+            Assert.AreEqual(expected.Sequence, actual.Sequence, where + " sequence");
+            Assert.AreEqual(expected.FrameSequence, actual.FrameSequence, where + " frame_sequence");
+            Assert.AreEqual(expected.TimeSeconds, actual.TimeSeconds, 1e-6, where + " time_s");
+            Assert.AreEqual(expected.Flags, actual.Flags, where + " flags");
+            AssertVec(expected.RootPosition, actual.RootPosition, tolerance, where + " root_position");
+            AssertVec(expected.RootVelocity, actual.RootVelocity, tolerance, where + " root_velocity");
+            // mocapctl prints contacts with 4 decimals: half a unit of the last digit is 5e-5.
+            float contact = Math.Max(tolerance, 5.1e-5f);
+            Assert.AreEqual(expected.LeftFootContact, actual.LeftFootContact, contact, where + " left contact");
+            Assert.AreEqual(expected.RightFootContact, actual.RightFootContact, contact, where + " right contact");
+            for (int j = 0; j < MocapPose.JointCount; j++)
+            {
+                Quat e = expected.GetJointRotation(j), a = actual.GetJointRotation(j);
+                Assert.AreEqual(e.W, a.W, tolerance, $"{where} joint {j} w");
+                Assert.AreEqual(e.X, a.X, tolerance, $"{where} joint {j} x");
+                Assert.AreEqual(e.Y, a.Y, tolerance, $"{where} joint {j} y");
+                Assert.AreEqual(e.Z, a.Z, tolerance, $"{where} joint {j} z");
+                AssertVec(expected.GetJointPosition(j), actual.GetJointPosition(j), tolerance, $"{where} joint {j} position");
+            }
+        }
+
+        public static void AssertVec(Vec3 e, Vec3 a, float tolerance, string where)
+        {
+            Assert.IsTrue(e.ApproximatelyEquals(a, tolerance), $"{where}: expected {e}, got {a} (tolerance {tolerance})");
+        }
+    }
+
+    [TestFixture]
+    public sealed class SolverTests
+    {
+        SynthCapture _capture;
+        MocapModel _model;
+        List<MocapPose> _poses;
+        MocapPollResult _pollAfterEnd;
+
+        [OneTimeSetUp]
+        public void ReplayThroughTheSolver()
+        {
+            TestPaths.RequireEngine();
+            _capture = TestPaths.Synth("walk", seconds: 6, seed: 3);
+            _model = MocapModel.Open(TestPaths.ModelPath);
+            using var session = SolverReplay.OpenCalibratedReplay(_capture, _model.Info.FrameRate);
+            using var solver = MocapSolver.Open(_model);
+            Assert.AreEqual(0, solver.AddCharacter(session));
+            solver.Start();
+            session.Start();
+            _poses = SolverReplay.DrainAll(solver)[0];
+            var last = default(MocapPose);
+            _pollAfterEnd = solver.PollLatest(0, ref last);
+        }
+
+        [OneTimeTearDown]
+        public void CloseModel() => _model?.Dispose();
+
+        [Test]
+        public void ModelInfoDescribesTheContractSkeleton()
+        {
+            var info = _model.Info;
+            TestContext.WriteLine($"{info.ModelName}: {info.Precision}, {info.FrameRate} Hz, state {info.StateLayers} x {info.StateSize}");
+            Assert.AreEqual(1, info.ContractVersion);
+            Assert.AreEqual(60f, info.FrameRate, "the shipped model runs at 60 Hz");
+            Assert.AreEqual("fp32", info.Precision);
+            Assert.IsNotEmpty(info.ModelName);
+            Assert.Greater(info.StateLayers, 0);
+            Assert.Greater(info.StateSize, 0);
+            CollectionAssert.AreEqual(SmplSkeleton.JointNames, info.JointNames);
+            CollectionAssert.AreEqual(SmplSkeleton.Parents, info.JointParents);
+            for (int j = 0; j < SmplSkeleton.JointCount; j++)
+                Assert.AreEqual(info.RestOffsets[j], info.Skeleton.RestOffset(j), $"joint {j} offset");
+            Assert.Greater(info.Skeleton.RestPosition(0).Y, 0.5f, "the pelvis stands above the floor");
+            Assert.AreEqual(TestPaths.ModelPath, _model.Path);
+        }
+
+        [Test]
+        public void PosesFlowInOrderUntilEndOfStream()
+        {
+            Assert.Greater(_poses.Count, 100, "poses were solved");
+            Assert.AreEqual(MocapPollResult.EndOfStream, _pollAfterEnd);
+            double period = 1.0 / _model.Info.FrameRate;
+            for (int i = 0; i < _poses.Count; i++)
+            {
+                var p = _poses[i];
+                Assert.AreEqual((ulong)i, p.Sequence, "per-character sequence 0, 1, 2 ...");
+                Assert.AreEqual(0, p.Character);
+                if (i > 0)
+                {
+                    Assert.AreEqual(_poses[i - 1].FrameSequence + 1, p.FrameSequence, $"pose {i}: no frame skipped on a fast replay");
+                    Assert.AreEqual(period, p.TimeSeconds - _poses[i - 1].TimeSeconds, 1e-6, $"pose {i} time step");
+                }
+                Assert.LessOrEqual(p.FrameEmittedNs, p.PoseEmittedNs, $"pose {i}: solved after its frame");
+                for (int j = 0; j < MocapPose.JointCount; j++)
+                {
+                    Quat q = p.GetJointRotation(j);
+                    Assert.AreEqual(1f, q.LengthSquared, 1e-4f, $"pose {i} joint {j} is a unit quaternion");
+                    Assert.IsTrue(p.GetJointPosition(j).IsFinite, $"pose {i} joint {j} position");
+                }
+                Assert.IsTrue(p.RootVelocity.IsFinite);
+                Assert.That(p.LeftFootContact, Is.InRange(0f, 1f));
+                Assert.That(p.RightFootContact, Is.InRange(0f, 1f));
+            }
+        }
+
+        [Test]
+        public void JointPositionsAreTheForwardKinematicsOfTheRotations()
+        {
+            // The C# skeleton's FK (model proportions) reproduces the engine's positions: the
+            // rotation conventions, the joint order and the conversion to SmplPose all agree.
+            var skeleton = _model.Info.Skeleton;
+            var smpl = new SmplPose();
+            var global = new Quat[SmplSkeleton.JointCount];
+            var positions = new Vec3[SmplSkeleton.JointCount];
+            for (int i = 0; i < _poses.Count; i += 7)
+            {
+                var p = _poses[i];
+                PoseConversion.ToSmplPose(ref p, smpl);
+                Assert.AreEqual(p.RootPosition, smpl.RootPosition);
+                skeleton.ForwardKinematics(smpl.Rotations, smpl.RootPosition, global, positions);
+                for (int j = 0; j < SmplSkeleton.JointCount; j++)
+                    SolverReplay.AssertVec(p.GetJointPosition(j), positions[j], 1e-4f, $"pose {i} joint {j}");
+
+                var rebuilt = p;
+                PoseConversion.FromSmplPose(smpl, skeleton, ref rebuilt);
+                for (int j = 0; j < SmplSkeleton.JointCount; j++)
+                    SolverReplay.AssertVec(p.GetJointPosition(j), rebuilt.GetJointPosition(j), 1e-4f, $"rebuilt pose {i} joint {j}");
+            }
+        }
+
+        [Test]
+        public void PosesEqualMocapctlReplayOfTheSameCapture()
+        {
+            var expected = PoseJsonLines.Load(TestPaths.ReplayPoses(_capture).JsonPath);
+            Assert.AreEqual(expected.Length, _poses.Count, "pose count");
+            for (int i = 0; i < expected.Length; i++)
+                SolverReplay.AssertSame(expected[i], _poses[i], $"pose {i}");
+        }
+
+        [Test]
+        public void ThreeCharactersFromThreeReplaysThroughOneSolver()
+        {
+            var captures = new[]
+            {
+                _capture,
+                TestPaths.Synth("arms", seconds: 5, seed: 4),
+                TestPaths.Synth("squat", seconds: 4, seed: 5),
+            };
+            var sessions = new MocapSession[3];
+            try
+            {
+                using var solver = MocapSolver.Open(_model);
+                for (int c = 0; c < 3; c++)
+                {
+                    sessions[c] = SolverReplay.OpenCalibratedReplay(captures[c], _model.Info.FrameRate);
+                    Assert.AreEqual(c, solver.AddCharacter(sessions[c]));
+                    Assert.AreSame(sessions[c], solver.GetSession(c));
+                }
+                Assert.AreEqual(3, solver.CharacterCount);
+                solver.Start();
+                foreach (var s in sessions) s.Start();
+                var poses = SolverReplay.DrainAll(solver);
+                for (int c = 0; c < 3; c++)
+                {
+                    // Each character equals its own single-character replay: batching characters
+                    // into one inference call must not mix their states. (A batch of 3 may round
+                    // differently from a batch of 1 inside ONNX Runtime, hence 1e-4.)
+                    var expected = PoseJsonLines.Load(TestPaths.ReplayPoses(captures[c]).JsonPath);
+                    Assert.AreEqual(expected.Length, poses[c].Count, $"character {c} pose count");
+                    for (int i = 0; i < expected.Length; i++)
+                    {
+                        Assert.AreEqual(c, poses[c][i].Character);
+                        SolverReplay.AssertSame(expected[i], poses[c][i], $"character {c} pose {i}", 1e-4f);
+                    }
+                }
+            }
+            finally
+            {
+                foreach (var s in sessions) s?.Dispose();
+            }
+        }
+
+        [Test]
+        public void AWrongModelPathThrowsNamingTheFile()
+        {
+            var path = Path.Combine(TestPaths.NewTempDirectory("nomodel"), "missing_model.onnx");
+            var e = Assert.Throws<MocapException>(() => MocapModel.Open(path));
+            TestContext.WriteLine($"{e.Status}: {e.Message}");
+            Assert.AreEqual(MocapStatus.NotFound, e.Status);
+            StringAssert.Contains(path, e.Message);
+
+            var notAModel = Path.Combine(TestPaths.NewTempDirectory("badmodel"), "not_a_model.onnx");
+            File.WriteAllText(notAModel, "this is not an ONNX file");
+            e = Assert.Throws<MocapException>(() => MocapModel.Open(notAModel));
+            TestContext.WriteLine($"{e.Status}: {e.Message}");
+            StringAssert.Contains(notAModel, e.Message);
+        }
+
+        [Test]
+        public void CudaRequestedWithoutACudaBuildThrowsClearly()
+        {
+            var options = new ModelOptions { ExecutionProvider = ExecutionProvider.Cuda };
+            MocapModel model = null;
+            try
+            {
+                model = MocapModel.Open(TestPaths.ModelPath, options);
+            }
+            catch (MocapException e)
+            {
+                TestContext.WriteLine($"{e.Status}: {e.Message}");
+                Assert.AreNotEqual(MocapStatus.Ok, e.Status);
+                StringAssert.Contains("cuda", e.Message.ToLowerInvariant(), "the message says CUDA is the problem");
+                return;
+            }
+            model.Dispose();
+            Assert.Inconclusive("this ONNX Runtime has CUDA and a GPU: nothing to refuse");
+        }
+
+        [Test]
+        public void ModelOptionsReachTheEngine()
+        {
+            // (ONNX Runtime is loaded once per process, so a different library path cannot be
+            // observed here after the first model; a path the engine cannot hold is refused in C#.)
+            var e = Assert.Throws<ArgumentException>(() => MocapModel.Open(TestPaths.ModelPath,
+                new ModelOptions { OnnxRuntimePath = new string('x', 300) }));
+            StringAssert.Contains("OnnxRuntimePath", e.Message);
+
+            using var model = MocapModel.Open(TestPaths.ModelPath, new ModelOptions
+            {
+                IntraOpThreads = 1, OptimizationLevel = GraphOptimizationLevel.Basic,
+            });
+            Assert.AreEqual(_model.Info.FrameRate, model.Info.FrameRate);
+        }
+
+        [Test]
+        public void TheSolverOwnsItsSessionsFrames()
+        {
+            using var session = SolverReplay.OpenCalibratedReplay(_capture, _model.Info.FrameRate);
+            var solver = MocapSolver.Open(_model);
+            solver.AddCharacter(session);
+            var frame = default(MocapFrame);
+            Assert.Throws<InvalidOperationException>(() => session.PollLatest(ref frame));
+            Assert.Throws<InvalidOperationException>(() => session.Drain(new MocapFrame[4], out _));
+            Assert.Throws<InvalidOperationException>(() => session.Stop());
+            using (var other = MocapSolver.Open(_model))
+                Assert.Throws<InvalidOperationException>(() => other.AddCharacter(session));
+            solver.Dispose();
+            Assert.AreEqual(MocapPollResult.NoData, session.PollLatest(ref frame), "the session is free again");
+            Assert.Throws<ObjectDisposedException>(() => solver.Start());
+        }
+
+        [Test]
+        public void EngineRefusalsCarryTheEngineText()
+        {
+            var config = SessionConfig.Replay(_capture.CapturePath);
+            config.OutputRateHz = _model.Info.FrameRate / 2;
+            using var slow = MocapSession.Open(config);
+            using var solver = MocapSolver.Open(_model);
+            var e = Assert.Throws<MocapException>(() => solver.AddCharacter(slow));
+            Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
+            StringAssert.Contains("Hz", e.Message);
+
+            e = Assert.Throws<MocapException>(() => solver.Start());
+            Assert.AreEqual(MocapStatus.State, e.Status);
+            StringAssert.Contains("no characters", e.Message);
+
+            using var session = SolverReplay.OpenCalibratedReplay(_capture, _model.Info.FrameRate);
+            Assert.AreEqual(0, solver.AddCharacter(session), "the refused session took no index");
+            solver.Start();
+            var pose = default(MocapPose);
+            e = Assert.Throws<MocapException>(() => solver.PollLatest(5, ref pose));
+            Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
+            StringAssert.Contains("character 5 does not exist", e.Message);
+            e = Assert.Throws<MocapException>(() => solver.ResetCharacter(-1));
+            StringAssert.Contains("does not exist", e.Message);
+            solver.ResetCharacter(0);
+
+            using var late = SolverReplay.OpenCalibratedReplay(_capture, _model.Info.FrameRate);
+            e = Assert.Throws<MocapException>(() => solver.AddCharacter(late));
+            Assert.AreEqual(MocapStatus.State, e.Status);
+
+            var bad = new SolverConfig { ContactThreshold = 2f };
+            e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model, bad));
+            StringAssert.Contains("contact_threshold", e.Message);
+        }
+
+        [Test]
+        public void DisposingSessionAndModelBeforeTheSolverIsSafe()
+        {
+            // The wrong order on purpose: the solver's handle references the session and model
+            // handles, so their native close waits until the solver has stopped its thread.
+            var model = MocapModel.Open(TestPaths.ModelPath);
+            var session = SolverReplay.OpenCalibratedReplay(_capture, model.Info.FrameRate);
+            var solver = MocapSolver.Open(model);
+            solver.AddCharacter(session);
+            solver.Start();
+            session.Start();
+            session.Dispose();
+            model.Dispose();
+            Assert.IsTrue(model.IsDisposed);
+            Assert.Throws<ObjectDisposedException>(() => MocapSolver.Open(model));
+            // The native session and model are still alive: the replay runs to its end.
+            var poses = SolverReplay.DrainAll(solver)[0];
+            Assert.AreEqual(_poses.Count, poses.Count);
+            solver.Dispose();
+            solver.Dispose();
+        }
+    }
+}
