@@ -231,10 +231,11 @@ TEST(Session, LiveSerialPtyCalibratesAndTracksAndRecords)
     mocap_session_config config = serial_config(receiver.link);
     snprintf(config.capture_path, sizeof config.capture_path, "%s", record.c_str());
     // The test's writer thread paces packets in real time; on a loaded machine (parallel ctest)
-    // it can stall for tens of ms, which a real receiver does not. A longer hold keeps those
+    // it can stall for tens or hundreds of ms (sanitizer builds on a busy machine), which a real
+    // receiver does not. A longer hold keeps those
     // frames fresh instead of held, so the test checks tracking, not the scheduler.
-    config.hold_latency_s = 0.3f;
-    config.stale_after_s = 1.0f;
+    config.hold_latency_s = 1.0f;  // the most the engine accepts
+    config.stale_after_s = 2.0f;
     SessionCloser session;
     ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
     ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
@@ -557,9 +558,11 @@ TEST(Session, DiskFullMidSessionStopsRecordingButNotTracking)
     ASSERT_EQ(capture_reader_open(record.c_str(), &reader), MOCAP_OK) << mocap_last_error();
     int64_t ns;
     const uint8_t *data;
-    size_t len, records = 0;
-    while (capture_reader_next(reader, &ns, &data, &len) == MOCAP_OK) ++records;
-    EXPECT_GT(records, 10u);
+    size_t len, bytes = 0;
+    while (capture_reader_next(reader, &ns, &data, &len) == MOCAP_OK) bytes += len;
+    // Records hold whatever one read returned (more packets per read under load), so count
+    // bytes: most of the 40,000-byte limit holds data that reached the disk before it was hit.
+    EXPECT_GT(bytes, 20000u);
     capture_reader_close(reader);
 }
 
