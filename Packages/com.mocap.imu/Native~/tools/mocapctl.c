@@ -404,6 +404,39 @@ static int wait_for_step(replay_state *st, int step, const char *label, int *end
     return 0;
 }
 
+/* Opens a replay of capture and arranges its calibration: a saved file (cal_path), or the
+ * heading and T-pose windows of the capture's prelude (prelude "H,S,T" seconds; synth's layout
+ * by default: heading 0-3 s, strap 3-5 s, T-pose 5-8 s; the middle of each window is used), both
+ * queued before the start because a fast replay would outrun a caller reacting to results.
+ * Returns 0, or 1 after printing why. */
+static int open_replay_session(const char *capture, mocap_session_config *cfg, const char *prelude,
+                               const char *cal_path, mocap_session **out)
+{
+    double t0 = 0;
+    if (first_capture_time(capture, &t0) != 0) return 1;
+    double heading_s = 3.0, strap_s = 2.0, tpose_s = 3.0;
+    if (prelude && sscanf(prelude, "%lf,%lf,%lf", &heading_s, &strap_s, &tpose_s) != 3) {
+        fprintf(stderr, "mocapctl: --prelude wants HEADING,STRAP,TPOSE seconds\n");
+        return 1;
+    }
+    mocap_status s = mocap_session_open(cfg, out);
+    if (s != MOCAP_OK) return fail(s, "opening replay");
+    if (cal_path) {
+        mocap_calibration cal;
+        s = mocap_calibration_load(cal_path, &cal);
+        if (s == MOCAP_OK) s = mocap_calibration_set(*out, &cal);
+        if (s != MOCAP_OK) return fail(s, "loading calibration");
+        return 0;
+    }
+    s = mocap_calibration_schedule(*out, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
+                                   (float)(heading_s - 1.0));
+    if (s == MOCAP_OK)
+        s = mocap_calibration_schedule(*out, MOCAP_CALIBRATION_TPOSE,
+                                       t0 + heading_s + strap_s + 0.5, (float)(tpose_s - 1.0));
+    if (s != MOCAP_OK) return fail(s, "scheduling calibration");
+    return 0;
+}
+
 static int cmd_replay(int argc, char **argv)
 {
     if (argc < 1 || argv[0][0] == '-') return usage();
@@ -448,41 +481,8 @@ static int cmd_replay(int argc, char **argv)
     cfg.replay_realtime = arg_flag(argc, argv, "--realtime");
     if (rate) cfg.output_rate_hz = (float)atof(rate);
 
-    double t0 = 0;
-    if (first_capture_time(capture, &t0) != 0) goto done;
-    mocap_status s = mocap_session_open(&cfg, &st->session);
-    if (s != MOCAP_OK) {
-        rc = fail(s, "opening replay");
-        goto done;
-    }
-
-    /* Calibration: a saved file, or the windows of the capture's prelude (synth's layout by
-     * default: heading 0-3 s, strap 3-5 s, T-pose 5-8 s; the middle of each window is used). */
-    double heading_s = 3.0, strap_s = 2.0, tpose_s = 3.0;
-    if (prelude && sscanf(prelude, "%lf,%lf,%lf", &heading_s, &strap_s, &tpose_s) != 3) {
-        fprintf(stderr, "mocapctl: --prelude wants HEADING,STRAP,TPOSE seconds\n");
-        goto done;
-    }
-    if (cal_path) {
-        mocap_calibration cal;
-        s = mocap_calibration_load(cal_path, &cal);
-        if (s == MOCAP_OK) s = mocap_calibration_set(st->session, &cal);
-        if (s != MOCAP_OK) {
-            rc = fail(s, "loading calibration");
-            goto done;
-        }
-    } else {
-        /* Both windows are queued before the start: a fast replay would outrun us. */
-        s = mocap_calibration_schedule(st->session, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
-                                       (float)(heading_s - 1.0));
-        if (s == MOCAP_OK)
-            s = mocap_calibration_schedule(st->session, MOCAP_CALIBRATION_TPOSE,
-                                           t0 + heading_s + strap_s + 0.5, (float)(tpose_s - 1.0));
-        if (s != MOCAP_OK) {
-            rc = fail(s, "scheduling calibration");
-            goto done;
-        }
-    }
+    mocap_status s;
+    if (open_replay_session(capture, &cfg, prelude, cal_path, &st->session) != 0) goto done;
     s = mocap_session_start(st->session);
     if (s != MOCAP_OK) {
         rc = fail(s, "starting replay");
@@ -1066,37 +1066,7 @@ static int cmd_replay_pose(int argc, char **argv)
     snprintf(cfg.path, sizeof cfg.path, "%s", capture);
     cfg.replay_realtime = arg_flag(argc, argv, "--realtime");
     cfg.output_rate_hz = info.frame_rate;
-    double t0 = 0;
-    if (first_capture_time(capture, &t0) != 0) goto done;
-    s = mocap_session_open(&cfg, &session);
-    if (s != MOCAP_OK) {
-        rc = fail(s, "opening replay");
-        goto done;
-    }
-    double heading_s = 3.0, strap_s = 2.0, tpose_s = 3.0;
-    if (prelude && sscanf(prelude, "%lf,%lf,%lf", &heading_s, &strap_s, &tpose_s) != 3) {
-        fprintf(stderr, "mocapctl: --prelude wants HEADING,STRAP,TPOSE seconds\n");
-        goto done;
-    }
-    if (cal_path) {
-        mocap_calibration cal;
-        s = mocap_calibration_load(cal_path, &cal);
-        if (s == MOCAP_OK) s = mocap_calibration_set(session, &cal);
-        if (s != MOCAP_OK) {
-            rc = fail(s, "loading calibration");
-            goto done;
-        }
-    } else {
-        s = mocap_calibration_schedule(session, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
-                                       (float)(heading_s - 1.0));
-        if (s == MOCAP_OK)
-            s = mocap_calibration_schedule(session, MOCAP_CALIBRATION_TPOSE,
-                                           t0 + heading_s + strap_s + 0.5, (float)(tpose_s - 1.0));
-        if (s != MOCAP_OK) {
-            rc = fail(s, "scheduling calibration");
-            goto done;
-        }
-    }
+    if (open_replay_session(capture, &cfg, prelude, cal_path, &session) != 0) goto done;
     int32_t character = -1;
     s = mocap_solver_open(model, NULL, &solver);
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &character);
@@ -1556,11 +1526,6 @@ static int cmd_stream(int argc, char **argv)
                               "out to the sides, stand still.", 3.0f);
         if (cal != 0) goto done;
     } else {
-        double heading_s = 3.0, strap_s = 2.0, tpose_s = 3.0;
-        if (prelude && sscanf(prelude, "%lf,%lf,%lf", &heading_s, &strap_s, &tpose_s) != 3) {
-            fprintf(stderr, "mocapctl: --prelude wants HEADING,STRAP,TPOSE seconds\n");
-            goto done;
-        }
         for (int i = 0; i < nrep; ++i) {
             mocap_session_config cfg;
             mocap_config_defaults(&cfg);
@@ -1569,19 +1534,7 @@ static int cmd_stream(int argc, char **argv)
             cfg.replay_realtime = arg_flag(argc, argv, "--realtime") || speed != NULL;
             if (speed) cfg.replay_speed = (float)atof(speed);
             cfg.output_rate_hz = info.frame_rate;
-            double t0 = 0;
-            if (first_capture_time(replays[i], &t0) != 0) goto done;
-            s = mocap_session_open(&cfg, &sessions[i]);
-            if (s == MOCAP_OK)
-                s = mocap_calibration_schedule(sessions[i], MOCAP_CALIBRATION_HEADING, t0 + 0.5,
-                                               (float)(heading_s - 1.0));
-            if (s == MOCAP_OK)
-                s = mocap_calibration_schedule(sessions[i], MOCAP_CALIBRATION_TPOSE,
-                                               t0 + heading_s + strap_s + 0.5, (float)(tpose_s - 1.0));
-            if (s != MOCAP_OK) {
-                rc = fail(s, replays[i]);
-                goto done;
-            }
+            if (open_replay_session(replays[i], &cfg, prelude, NULL, &sessions[i]) != 0) goto done;
         }
     }
     s = mocap_solver_open(model, NULL, &solver);
