@@ -1,0 +1,215 @@
+using System;
+using System.Collections.Generic;
+using System.IO;
+using UnityEngine;
+
+namespace Mocap.Imu
+{
+    /// <summary>Where one character's sensor data comes from.</summary>
+    [Serializable]
+    public sealed class MocapCharacterSource
+    {
+        [Tooltip("Shown in the inspector, the overlay and logs.")]
+        public string name = "Performer";
+
+        [Tooltip("Serial port, HID receiver, or a raw capture file played back (no sensors needed).")]
+        public MocapSourceKind source = MocapSourceKind.Serial;
+
+        [Tooltip("Serial: the port (\"COM3\", \"/dev/ttyUSB0\"). HID: a hidraw path, or empty to use vendor/product id.")]
+        public string port = "COM3";
+
+        [Tooltip("Serial baud rate.")]
+        public int baud = 460800;
+
+        [Tooltip("HID vendor id, used when the port is empty.")]
+        public int hidVendorId;
+
+        [Tooltip("HID product id, used when the port is empty.")]
+        public int hidProductId;
+
+        [Tooltip("Playback: capture file. Relative paths resolve against the project (\"Packages/...\" works for package files).")]
+        public string captureFile = "Packages/com.mocap.imu/Tests/Runtime/Fixtures/walk.cap";
+
+        [Tooltip("Playback: at the recorded pace (off: as fast as the engine can).")]
+        public bool playbackRealtime = true;
+
+        [Tooltip("Playback: pace multiplier.")]
+        [Min(0.01f)] public float playbackSpeed = 1f;
+
+        [Tooltip("Playback: schedule the capture's own calibration windows (seconds after its first record). " +
+                 "The defaults match `mocapctl synth`'s prelude: heading 0.5-2.5 s, T-pose 5.5-7.5 s.")]
+        public bool playbackCalibrationWindows = true;
+        public float playbackHeadingStart = 0.5f;
+        public float playbackHeadingSeconds = 2f;
+        public float playbackTPoseStart = 5.5f;
+        public float playbackTPoseSeconds = 2f;
+
+        [Tooltip("Node id of the sensor on each body segment: pelvis, left wrist, right wrist, left shin, right shin, head (-1 = none).")]
+        public int[] nodeIds = { 0, 1, 2, 3, 4, 5 };
+
+        [Tooltip("Optional calibration file loaded at start (skips the calibration steps).")]
+        public string calibrationFile = "";
+
+        [Tooltip("Serial/HID: reopen the device after an unplug.")]
+        public bool autoReconnect = true;
+
+        /// <summary>
+        /// The engine config for this source. Main thread (paths resolve through Application);
+        /// the session component sets the output rate to the model's.
+        /// </summary>
+        public SessionConfig ToSessionConfig(float outputRateHz, string capturePath)
+        {
+            SessionConfig config;
+            switch (source)
+            {
+                case MocapSourceKind.Replay:
+                    config = SessionConfig.Replay(MocapSettings.ResolvePath(captureFile), playbackRealtime, playbackSpeed);
+                    break;
+                case MocapSourceKind.Hid:
+                    config = string.IsNullOrEmpty(port)
+                        ? SessionConfig.Hid((ushort)hidVendorId, (ushort)hidProductId)
+                        : SessionConfig.Hid(port);
+                    break;
+                default:
+                    config = SessionConfig.Serial(port, baud);
+                    break;
+            }
+            if (nodeIds != null && nodeIds.Length == MocapSession.SensorCount)
+                for (int s = 0; s < MocapSession.SensorCount; s++) config.NodeIds[s] = nodeIds[s];
+            config.AutoReconnect = autoReconnect && source != MocapSourceKind.Replay;
+            if (outputRateHz > 0f) config.OutputRateHz = outputRateHz;
+            config.CapturePath = capturePath ?? string.Empty;
+            return config;
+        }
+    }
+
+    /// <summary>
+    /// Everything a <see cref="MocapSessionComponent"/> needs: the pose model and where it runs,
+    /// the solver options, and one source per character. Create with Assets > Create > Mocap IMU >
+    /// Settings, or ScriptableObject.CreateInstance at run time.
+    /// </summary>
+    [CreateAssetMenu(menuName = "Mocap IMU/Settings", fileName = "MocapSettings")]
+    public sealed class MocapSettings : ScriptableObject
+    {
+        [Header("Pose model")]
+        [Tooltip("The .onnx pose model. Relative paths resolve against the project; in a player, a bare file name is looked up in StreamingAssets.")]
+        public string modelPath = "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx";
+
+        public ExecutionProvider executionProvider = ExecutionProvider.Cpu;
+
+        [Tooltip("Threads ONNX Runtime uses inside one operator; 0 = its default.")]
+        [Min(0)] public int intraOpThreads;
+
+        [Tooltip("CUDA device index.")]
+        [Min(0)] public int cudaDevice;
+
+        [Tooltip("Explicit ONNX Runtime library; empty = the com.github.asus4.onnxruntime plugin for this platform.")]
+        public string onnxRuntimePath = "";
+
+        [Header("Solver")]
+        [Tooltip("Planted feet do not slide and stay on the floor.")]
+        public bool driftCorrection = true;
+        [Range(0f, 1f)] public float contactThreshold = 0.5f;
+        public float floorHeight;
+        [Tooltip("Only calibrated frames are solved.")]
+        public bool requireCalibration = true;
+
+        [Header("Characters (one sensor set each)")]
+        public List<MocapCharacterSource> characters = new List<MocapCharacterSource> { new MocapCharacterSource() };
+
+        [Header("Raw capture recording")]
+        [Tooltip("Folder for recorded captures; relative to the project folder (editor) or persistentDataPath (player).")]
+        public string recordingFolder = "Captures";
+
+        /// <summary>A relative path against the project folder (editor; Unity maps "Packages/...") or the player's data.</summary>
+        public static string ResolvePath(string path)
+        {
+            if (string.IsNullOrEmpty(path)) return string.Empty;
+            if (Path.IsPathRooted(path)) return path;
+            var full = Path.GetFullPath(path);
+            if (File.Exists(full) || Application.isEditor) return full;
+            var streaming = Path.Combine(Application.streamingAssetsPath, Path.GetFileName(path));
+            return File.Exists(streaming) ? streaming : full;
+        }
+
+        /// <summary>Model options with the ONNX Runtime library of this platform (docs: "How the engine finds ONNX Runtime").</summary>
+        public ModelOptions ToModelOptions()
+        {
+            return new ModelOptions
+            {
+                ExecutionProvider = executionProvider,
+                IntraOpThreads = intraOpThreads,
+                CudaDevice = cudaDevice,
+                OnnxRuntimePath = string.IsNullOrEmpty(onnxRuntimePath) ? OnnxRuntimeLocator.Find() : ResolvePath(onnxRuntimePath),
+            };
+        }
+
+        /// <summary>Solver options.</summary>
+        public SolverConfig ToSolverConfig()
+        {
+            return new SolverConfig
+            {
+                DriftCorrection = driftCorrection,
+                ContactThreshold = contactThreshold,
+                FloorHeight = floorHeight,
+                RequireCalibration = requireCalibration,
+            };
+        }
+
+        /// <summary>Where recordings go.</summary>
+        public string ResolveRecordingFolder()
+        {
+            if (Path.IsPathRooted(recordingFolder)) return recordingFolder;
+            return Application.isEditor
+                ? Path.GetFullPath(string.IsNullOrEmpty(recordingFolder) ? "Captures" : recordingFolder)
+                : Path.Combine(Application.persistentDataPath, recordingFolder);
+        }
+    }
+
+    /// <summary>
+    /// The ONNX Runtime library shipped by com.github.asus4.onnxruntime, for the engine's
+    /// explicit path (the engine's own search does not look inside Unity packages or players).
+    /// Editor and player paths from Documentation~/index.md; the player paths are unverified.
+    /// </summary>
+    public static class OnnxRuntimeLocator
+    {
+        /// <summary>The first candidate that exists, else "" (let the engine search; $MOCAP_ONNXRUNTIME_PATH wins there).</summary>
+        public static string Find()
+        {
+            if (!string.IsNullOrEmpty(Environment.GetEnvironmentVariable("MOCAP_ONNXRUNTIME_PATH"))) return string.Empty;
+            foreach (var candidate in Candidates())
+                if (File.Exists(candidate)) return candidate;
+            return string.Empty;
+        }
+
+        static IEnumerable<string> Candidates()
+        {
+            const string Pkg = "Packages/com.github.asus4.onnxruntime/Plugins/";
+            string data = Application.dataPath;
+            switch (Application.platform)
+            {
+                case RuntimePlatform.WindowsEditor:
+                    yield return Path.GetFullPath(Pkg + "Windows/x64/onnxruntime.dll");
+                    break;
+                case RuntimePlatform.OSXEditor:
+                    yield return Path.GetFullPath(Pkg + "macOS/arm64/libonnxruntime.dylib");
+                    break;
+                case RuntimePlatform.LinuxEditor:
+                    yield return Path.GetFullPath(Pkg + "Linux/x64/libonnxruntime.so");
+                    break;
+                case RuntimePlatform.WindowsPlayer:
+                    yield return Path.Combine(data, "Plugins", "x86_64", "onnxruntime.dll");
+                    yield return Path.Combine(data, "Plugins", "onnxruntime.dll");
+                    break;
+                case RuntimePlatform.OSXPlayer:
+                    yield return Path.Combine(data, "PlugIns", "libonnxruntime.dylib");
+                    yield return Path.Combine(data, "Plugins", "libonnxruntime.dylib");
+                    break;
+                case RuntimePlatform.LinuxPlayer:
+                    yield return Path.Combine(data, "Plugins", "libonnxruntime.so");
+                    yield return Path.Combine(data, "Plugins", "x86_64", "libonnxruntime.so");
+                    break;
+            }
+        }
+    }
+}

@@ -1,0 +1,113 @@
+using System;
+using System.Collections.Generic;
+using UnityEngine;
+
+namespace Mocap.Imu
+{
+    /// <summary>One VMC destination: a character of the session to a receiver.</summary>
+    [Serializable]
+    public sealed class VmcDestination
+    {
+        [Min(0)] public int character;
+        [Tooltip("\"host:port\"; VMC receivers usually listen on 39539 (one port per avatar).")]
+        public string address = VmcSender.DefaultDestination;
+    }
+
+    /// <summary>
+    /// Streams the session's characters to VMC receivers (VSeeFace, Warudo, another Unity app):
+    /// several characters to several ports, one core <see cref="VmcSender"/> each. Sends each
+    /// character's newest pose once per new pose; nothing is allocated per frame.
+    /// </summary>
+    [DefaultExecutionOrder(-50)]
+    [AddComponentMenu("Mocap IMU/VMC Stream")]
+    public sealed class VmcStreamComponent : MonoBehaviour
+    {
+        public MocapSessionComponent session;
+        public List<VmcDestination> destinations = new List<VmcDestination> { new VmcDestination() };
+        [Tooltip("Bundles per second at most (0 = every pose).")]
+        [Min(0f)] public float maxRateHz = 60f;
+        [Tooltip("Allow receivers on other machines (off: loopback only).")]
+        public bool allowRemote;
+
+        [Header("Status (read only)")]
+        [SerializeField, TextArea(1, 6)] string statusText = "";
+
+        VmcSender[] _senders = Array.Empty<VmcSender>();
+        ulong[] _lastSequence = Array.Empty<ulong>();
+        bool[] _sentAny = Array.Empty<bool>();
+        float _nextStatus;
+
+        MocapModel _openedFor;
+
+        void OnDisable() => CloseSenders();
+
+        void OnDestroy() => CloseSenders();
+
+        void OpenSenders(MocapSessionComponent s)
+        {
+            CloseSenders();
+            _openedFor = s.Model;
+            var options = new VmcOptions { MaxRateHz = maxRateHz, AllowRemote = allowRemote };
+            _senders = new VmcSender[destinations.Count];
+            _lastSequence = new ulong[destinations.Count];
+            _sentAny = new bool[destinations.Count];
+            var text = new System.Text.StringBuilder();
+            for (int i = 0; i < destinations.Count; i++)
+            {
+                try
+                {
+                    _senders[i] = VmcSender.Open(s.Model, destinations[i].address, options);
+                }
+                catch (MocapException e)
+                {
+                    text.Append(destinations[i].address).Append(": ").Append(e.Message).Append('\n');
+                    Debug.LogError($"[Mocap IMU] VMC {destinations[i].address}: {e.Message}", this);
+                }
+            }
+            statusText = text.ToString();
+        }
+
+        void CloseSenders()
+        {
+            _openedFor = null;
+            foreach (var sender in _senders) sender?.Dispose();
+            _senders = Array.Empty<VmcSender>();
+        }
+
+        void Update()
+        {
+            if (session == null) return;
+            // (Re)open for each engine the session opens; senders keep their own skeleton copy.
+            var model = session.Status == MocapComponentStatus.Running ? session.Model : null;
+            if (model != _openedFor)
+            {
+                if (model != null) OpenSenders(session);
+                else CloseSenders();
+            }
+            for (int i = 0; i < _senders.Length; i++)
+            {
+                var sender = _senders[i];
+                if (sender == null) continue;
+                int c = destinations[i].character;
+                if (!session.TryGetLatestPose(c, out var pose)) continue;
+                if (_sentAny[i] && pose.Sequence == _lastSequence[i]) continue;
+                _lastSequence[i] = pose.Sequence;
+                _sentAny[i] = true;
+                sender.Send(in pose);
+            }
+            if (Time.unscaledTime >= _nextStatus && _senders.Length > 0)
+            {
+                _nextStatus = Time.unscaledTime + 1f;
+                var text = new System.Text.StringBuilder();
+                for (int i = 0; i < _senders.Length; i++)
+                {
+                    if (_senders[i] == null) continue;
+                    var st = _senders[i].GetStats();
+                    text.Append(_senders[i].Destination).Append(": ").Append(st.BundlesSent).Append(" bundles, ")
+                        .Append(st.SendFailures).Append(" failures\n");
+                }
+                statusText = text.ToString();
+            }
+        }
+    }
+}

@@ -1,0 +1,71 @@
+using Mocap.Imu;
+using UnityEngine;
+
+/// <summary>
+/// Live sample: builds the scene at run time. Put it on an empty GameObject in an empty scene,
+/// set the serial port (or assign a MocapSettings asset), optionally assign your own Humanoid
+/// avatar (in its T-pose, or set restPose to AlignToSmplTPose), and press Play.
+/// </summary>
+public sealed class LiveAvatarBootstrap : MonoBehaviour
+{
+    public MocapSettings settings;
+    public string serialPort = "COM3";
+    public Animator avatar;
+    public Mocap.Imu.Retarget.RigRestPose restPose = Mocap.Imu.Retarget.RigRestPose.TPose;
+    public bool physicsCharacter;
+
+    void Awake()
+    {
+        if (settings == null)
+        {
+            settings = ScriptableObject.CreateInstance<MocapSettings>();
+            settings.characters[0].source = MocapSourceKind.Serial;
+            settings.characters[0].port = serialPort;
+        }
+        SampleScene.BuildFloorAndLight();
+        var sessionObject = new GameObject("Mocap Session");
+        sessionObject.SetActive(false);
+        var session = sessionObject.AddComponent<MocapSessionComponent>();
+        session.settings = settings;
+        sessionObject.SetActive(true);
+
+        if (avatar == null) avatar = ProceduralHumanoid.Create("Avatar", Vector3.zero);
+        var driver = avatar.gameObject.AddComponent<HumanoidPoseDriver>();
+        driver.session = session;
+        driver.restPose = restPose;
+        if (physicsCharacter) avatar.gameObject.AddComponent<PhysicsCharacter>();
+
+        var overlay = sessionObject.AddComponent<CalibrationOverlay>();
+        overlay.session = session;
+        SampleScene.PlaceCamera(avatar.transform);
+    }
+}
+
+/// <summary>Shared scene helpers of the samples.</summary>
+public static class SampleScene
+{
+    public static void BuildFloorAndLight()
+    {
+        var floor = GameObject.CreatePrimitive(PrimitiveType.Plane); // has a MeshCollider: the physics character stands on it
+        floor.name = "Floor";
+        floor.transform.localScale = new Vector3(4f, 1f, 4f);
+        if (Object.FindObjectOfType<Light>() == null)
+        {
+            var light = new GameObject("Light").AddComponent<Light>();
+            light.type = LightType.Directional;
+            light.transform.rotation = Quaternion.Euler(50f, -30f, 0f);
+        }
+    }
+
+    public static void PlaceCamera(Transform target)
+    {
+        var camera = Camera.main;
+        if (camera == null)
+        {
+            camera = new GameObject("Main Camera").AddComponent<Camera>();
+            camera.tag = "MainCamera";
+        }
+        camera.transform.position = target.position + new Vector3(0f, 1.2f, 3.5f);
+        camera.transform.LookAt(target.position + Vector3.up * 0.9f);
+    }
+}

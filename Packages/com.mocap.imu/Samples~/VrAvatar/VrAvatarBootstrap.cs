@@ -1,0 +1,52 @@
+using Mocap.Imu;
+using UnityEngine;
+
+/// <summary>
+/// VR sample: the body comes from the sensors, the head from the XR rig where one is present
+/// (an active XR device and a camera, normally the XR Origin's Main Camera). The avatar is moved
+/// so its head sits under the headset and the head bone takes the headset's rotation, after the
+/// pose driver has written the body.
+/// </summary>
+[DefaultExecutionOrder(200)]
+public sealed class VrAvatarBootstrap : MonoBehaviour
+{
+    public MocapSettings settings;
+    public Animator avatar;
+    [Tooltip("The headset transform; empty = Camera.main when an XR device is active.")]
+    public Transform head;
+    [Tooltip("Eye position relative to the head bone, in the head bone's frame (metres).")]
+    public Vector3 eyeOffset = new Vector3(0f, 0.08f, 0.1f);
+
+    Transform _headBone;
+    bool _xr;
+
+    void Awake()
+    {
+        if (settings == null) settings = ScriptableObject.CreateInstance<MocapSettings>();
+        var sessionObject = new GameObject("Mocap Session");
+        sessionObject.SetActive(false);
+        var session = sessionObject.AddComponent<MocapSessionComponent>();
+        session.settings = settings;
+        sessionObject.SetActive(true);
+        sessionObject.AddComponent<CalibrationOverlay>().session = session;
+
+        if (avatar == null) avatar = ProceduralHumanoid.Create("Avatar", Vector3.zero);
+        var driver = avatar.gameObject.AddComponent<HumanoidPoseDriver>();
+        driver.session = session;
+        driver.rootMotion = Mocap.Imu.Retarget.RootMotionMode.InPlace; // the headset places the avatar
+        _headBone = avatar.GetBoneTransform(HumanBodyBones.Head);
+    }
+
+    void LateUpdate()
+    {
+        _xr = UnityEngine.XR.XRSettings.isDeviceActive;
+        var hmd = head != null ? head : (_xr && Camera.main != null ? Camera.main.transform : null);
+        if (hmd == null || _headBone == null) return; // no XR rig: the sensors' head is kept
+        // Head rotation from the headset; body translated so the eyes are at the headset.
+        _headBone.rotation = hmd.rotation;
+        Vector3 eyes = _headBone.TransformPoint(eyeOffset);
+        Vector3 shift = hmd.position - eyes;
+        shift.y = 0f; // height stays the body's: feet on the floor
+        avatar.transform.position += shift;
+    }
+}
