@@ -2,7 +2,8 @@
 # Runs every test suite of the project and ends with one line "N passed, N failed".
 #   engine:       ctest on a normal build, an ASan+UBSan build and (threading suites) a TSan build
 #   fuzz:         the HiPNUC decoder under libFuzzer for a bounded time
-#   dotnet:       the C# core's NUnit tests against the real native library
+#   dotnet:       the C# core's NUnit tests against the real native library, and a C# 9 syntax
+#                 check of every file of the Unity package (the Unity glue cannot be compiled here)
 #   python:       pytest over training/ (when it has tests)
 #   unity package: pytest over scripts/tests (.meta generator and package linter, incl. a lint
 #                 of the real package: run scripts/unity_meta.py after adding files)
@@ -99,6 +100,19 @@ if [ -d "$ROOT/dotnet/Mocap.Imu.Core.Tests" ]; then
       p="$(sed -E 's/.*Passed: +([0-9]+),.*/\1/' <<<"$line")"
       record "dotnet (C# core)" "$p" "$f"
     fi
+  fi
+fi
+
+if [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ] && command -v dotnet >/dev/null 2>&1; then
+  # The Unity glue cannot be compiled here (no UnityEngine assemblies): parse all of it instead.
+  echo "=== C# syntax of the whole Unity package (C# 9, editor and player symbols)"
+  log="$BUILD/syntax.log"
+  (cd "$ROOT" && dotnet run --project dotnet/Mocap.Imu.SyntaxCheck -- Packages/com.mocap.imu) 2>&1 | tee "$log"
+  line="$(grep -E '^[0-9]+ passed, [0-9]+ failed$' "$log" | tail -1)"
+  if [ -z "$line" ]; then
+    record "C# syntax (Unity package)" 0 1
+  else
+    record "C# syntax (Unity package)" "$(cut -d' ' -f1 <<<"$line")" "$(cut -d' ' -f3 <<<"$line")"
   fi
 fi
 
