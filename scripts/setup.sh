@@ -13,6 +13,7 @@ PACKAGES=(
   python3-torch python3-onnx python3-tqdm python3-matplotlib   # training/
   libopenblas0-pthread               # torch on the CPU is ~10x slower with the reference BLAS
   liblo-tools                        # oscdump: a real OSC receiver for interop tests
+  gcc-mingw-w64-x86-64-win32         # checks that the engine compiles for Windows
 )
 
 missing=()

@@ -2,6 +2,7 @@
 # Runs every test suite of the project and ends with one line "N passed, N failed".
 #   engine:       ctest on a normal build, an ASan+UBSan build and (threading suites) a TSan build
 #   fuzz:         the HiPNUC decoder under libFuzzer for a bounded time
+#   windows:      every engine source cross-compiled for Windows (MinGW-w64, syntax + warnings)
 #   dotnet:       the C# core's NUnit tests against the real native library, and a C# 9 syntax
 #                 check of every file of the Unity package (the Unity glue cannot be compiled here)
 #   python:       pytest over training/ (when it has tests)
@@ -82,6 +83,28 @@ if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
   else
     tail -40 "$fuzz_dir.log"; record "fuzz (decoder build)" 0 1
   fi
+fi
+
+# The engine must compile on Windows (Win32 serial, Winsock, LoadLibrary): every source of the
+# library, as CMake lists them, through MinGW-w64 with warnings as errors (syntax and types; no
+# link, no run: there is no Windows here).
+if command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1; then
+  echo "=== engine: Windows cross-compile check (MinGW-w64, -Werror)"
+  win_pass=0; win_fail=0
+  for src in $(grep -oE 'src/[a-z_0-9]+\.c' "$NATIVE/CMakeLists.txt" | sort -u | grep -v posix); do
+    if out="$(x86_64-w64-mingw32-gcc -std=c11 -Wall -Wextra -Wno-unused-parameter -Werror -fsyntax-only \
+        -D__USE_MINGW_ANSI_STDIO=1 -DMOCAP_BUILDING_LIBRARY -DMOCAP_HAVE_ONNXRUNTIME=1 \
+        -I"$NATIVE/include" -I"$NATIVE/src" -I"$ROOT/build/third_party/onnxruntime/include" \
+        "$NATIVE/$src" 2>&1)" && [ -z "$out" ]; then
+      win_pass=$((win_pass + 1))
+    else
+      win_fail=$((win_fail + 1)); echo "$src:"; echo "$out" | head -20
+    fi
+  done
+  echo "$win_pass sources compile for Windows, $win_fail do not"
+  record "engine (Windows compile)" "$win_pass" "$win_fail"
+else
+  echo "x86_64-w64-mingw32-gcc not found"; record "engine (Windows compile)" 0 1
 fi
 
 if [ -d "$ROOT/dotnet/Mocap.Imu.Core.Tests" ]; then

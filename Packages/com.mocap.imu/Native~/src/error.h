@@ -11,7 +11,11 @@ extern "C" {
 /* Record a printf-style message for the calling thread and return status, so that failing
  * functions can `return mocap_fail(MOCAP_ERR_IO, "port %s: %s", path, strerror(e));`. */
 mocap_status mocap_fail(mocap_status status, const char *fmt, ...)
-#if defined(__GNUC__)
+#if defined(__MINGW32__)
+    /* MinGW checks printf formats against the old msvcrt (no %zu) unless told the C99 stdio
+     * (__USE_MINGW_ANSI_STDIO, set by CMake) is used. */
+    __attribute__((format(gnu_printf, 2, 3)))
+#elif defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
