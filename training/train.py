@@ -75,6 +75,7 @@ class TrainConfig:
     val_source: str = "val"
     smoke: bool = False
     resume: bool = False
+    init_from: str | None = None      # start from these weights (fresh optimizer and schedule)
     ckpt_dir: str = str(CKPT_DIR)
     results_dir: str = str(RESULTS_DIR)
     progress: bool = True
@@ -250,6 +251,25 @@ def _lr(step: int, total: int, cfg: TrainConfig, time_frac: float = 0.0) -> floa
     return cfg.lr * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * frac)))
 
 
+def load_weights(path, device="cpu") -> PoseNet:
+    """A PoseNet with the weights of a checkpoint (a training checkpoint or a weights-only one
+    written by save_weights)."""
+    ck = load_checkpoint_file(path, device)
+    net = PoseNet(ModelConfig(**ck["config"])).to(device)
+    net.load_state_dict(ck["model"])
+    return net
+
+
+def save_weights(src, dst) -> None:
+    """Write the weights-only checkpoint of a training checkpoint (about a third of its size: no
+    optimizer state), the form committed beside the shipped model."""
+    ck = load_checkpoint_file(src)
+    dst = Path(dst)
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    torch.save({"model": ck["model"], "config": ck["config"], "step": ck.get("step"),
+                "best": ck.get("best")}, str(dst))
+
+
 def load_checkpoint_file(path, device="cpu") -> dict:
     try:   # torch >= 2.6 defaults to weights_only=True; our checkpoints hold plain python too
         return torch.load(str(path), map_location=device, weights_only=False)
@@ -307,6 +327,13 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     ckpt_dir, results_dir = Path(cfg.ckpt_dir), Path(cfg.results_dir)
     step, total, history, best = 0, cfg.steps, {"train": [], "val": []}, None
+    if cfg.init_from and not (cfg.resume and (ckpt_dir / "last.pt").is_file()):
+        # A warm start: the weights only (e.g. the shipped training/checkpoints/*.pt, which a fresh
+        # machine has while training/data/checkpoints/ is gone), so a later run continues from the
+        # shipped model on its own schedule instead of from scratch.
+        net = load_weights(cfg.init_from, device)
+        opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+        print(f"train: weights from {cfg.init_from}")
     if cfg.resume and (ckpt_dir / "last.pt").is_file():
         ck = load_checkpoint_file(ckpt_dir / "last.pt", device)
         net = PoseNet(ModelConfig(**ck["config"])).to(device)
@@ -418,7 +445,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
 def main(args) -> int:
     cfg = TrainConfig()
     for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
-              "max_clips", "resume", "smoke"):
+              "max_clips", "resume", "smoke", "init_from"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -444,6 +471,8 @@ def add_arguments(parser) -> None:
                         help="wall-clock budget (default 60)")
     parser.add_argument("--steps", type=int, default=None, help="total steps (default: from budget)")
     parser.add_argument("--resume", action="store_true", help="continue from checkpoints/last.pt")
+    parser.add_argument("--init-from", dest="init_from", default=None,
+                        help="start from these weights (e.g. training/checkpoints/mocap_pose.pt)")
     parser.add_argument("--device", default=None, choices=["auto", "cpu", "cuda"])
     parser.add_argument("--smoke", action="store_true", help="tiny procedural run (seconds)")
     parser.add_argument("--size", default=None, choices=sorted(SIZES), help="model size (default medium)")

@@ -43,6 +43,28 @@ def test_one_epoch_smoke_training_and_resume(tmp_path):
     assert net.config == tr.SIZES["tiny"]
 
 
+def test_weights_only_checkpoint_warm_starts_a_new_run(tmp_path):
+    train_m, val_m = _motions(2, 0), _motions(1, 50)
+    cfg = tr.TrainConfig(size="tiny", batch=4, window=60, lr=3e-3, warmup=2, steps=3, budget_minutes=5,
+                         ckpt_dir=str(tmp_path / "ck"), results_dir=str(tmp_path / "res"), progress=False,
+                         smoke=True, eval_every_s=1e9)
+    tr.train(cfg, train_m, val_m)
+    tr.save_weights(tmp_path / "ck" / "last.pt", tmp_path / "weights.pt")
+    small = torch.load(str(tmp_path / "weights.pt"))
+    assert "optimizer" not in small and small["config"] == tr.SIZES["tiny"].to_dict()
+    # the warm start begins exactly at those weights (a fresh run would start elsewhere)
+    net = tr.load_weights(tmp_path / "weights.pt")
+    for k, v in small["model"].items():
+        assert torch.equal(net.state_dict()[k], v)
+    fresh = tr.PoseNet(tr.SIZES["tiny"])
+    assert any(not torch.equal(fresh.state_dict()[k], v) for k, v in small["model"].items())
+    cfg2 = tr.TrainConfig(size="tiny", batch=4, window=60, lr=3e-3, warmup=2, steps=2, budget_minutes=5,
+                          ckpt_dir=str(tmp_path / "ck2"), results_dir=str(tmp_path / "res2"), progress=False,
+                          smoke=True, eval_every_s=1e9, init_from=str(tmp_path / "weights.pt"))
+    s2 = tr.train(cfg2, train_m, val_m)
+    assert s2["steps"] == 2   # its own schedule, not the source run's
+
+
 def test_stream_batcher_carries_state_and_resets_on_new_clips():
     rng = np.random.default_rng(0)
     b = tr.StreamBatcher(_motions(2, 0), batch=3, window=30, rng=rng)
