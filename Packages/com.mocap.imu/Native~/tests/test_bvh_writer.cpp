@@ -71,18 +71,6 @@ void rotation_of(const double angles[3], bvh_rotation_order order, double m[9])
 
 double angle_between(const double a[9], const double b[9]) { return mat3_angle_deg(a, b); }
 
-std::string python_with_numpy()
-{
-    std::vector<std::string> candidates;
-    if (const char *env = std::getenv("MOCAP_PYTHON")) candidates.push_back(env);
-    candidates.push_back("/usr/bin/python3");
-    candidates.push_back("python3");
-    for (const auto &p : candidates) {
-        std::string cmd = "\"" + p + "\" -c \"import numpy\" >/dev/null 2>&1";
-        if (std::system(cmd.c_str()) == 0) return p;
-    }
-    return "";
-}
 
 std::string run_capture(const std::string &cmd, int *rc)
 {

@@ -22,23 +22,9 @@ extern "C" {
 
 namespace {
 
-struct CommandResult {
-    int exit_code = -1;
-    std::string output;
-};
-
 CommandResult run_command(const std::string &args)
 {
-    CommandResult r;
-    std::string cmd = std::string(MOCAP_MOCAPCTL) + " " + args + " 2>&1";
-    FILE *p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
+    return run_shell(std::string(MOCAP_MOCAPCTL) + " " + args);
 }
 
 }  // namespace

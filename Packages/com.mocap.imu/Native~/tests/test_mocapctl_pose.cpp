@@ -29,36 +29,11 @@ const fs::path kTestsDir = fs::path(__FILE__).parent_path();
 const fs::path kRepo = kTestsDir / ".." / ".." / ".." / "..";
 const fs::path kShippedModel = kTestsDir / ".." / ".." / "Runtime" / "Models" / "mocap_pose_fp32.onnx";
 
-struct Result {
-    int exit_code = -1;
-    std::string output;
-};
-
-Result run(const std::string &cmd)
-{
-    Result r;
-    FILE *p = popen((cmd + " 2>&1").c_str(), "r");
-    if (!p) return r;
-    std::array<char, 8192> buf;
-    size_t n;
-    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using Result = CommandResult;
+Result run(const std::string &cmd) { return run_shell(cmd); }
 
 Result mocapctl(const std::string &args) { return run(std::string(MOCAP_MOCAPCTL) + " " + args); }
 
-std::string python_with_numpy()
-{
-    std::vector<std::string> candidates;
-    if (const char *env = std::getenv("MOCAP_PYTHON")) candidates.push_back(env);
-    candidates.push_back("/usr/bin/python3");
-    candidates.push_back("python3");
-    for (const auto &p : candidates)
-        if (std::system(("\"" + p + "\" -c \"import numpy\" >/dev/null 2>&1").c_str()) == 0) return p;
-    return "";
-}
 
 size_t count_lines(const std::string &path)
 {

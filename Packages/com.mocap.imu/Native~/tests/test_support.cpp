@@ -7,6 +7,10 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <array>
+#include <cstdlib>
+
+#include <sys/wait.h>
 
 #include <unistd.h>
 
@@ -63,4 +67,28 @@ void write_file_bytes(const std::string &path, const std::vector<uint8_t> &bytes
 {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char *>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+CommandResult run_shell(const std::string &cmd)
+{
+    CommandResult r;
+    FILE *p = popen((cmd + " 2>&1").c_str(), "r");
+    if (!p) return r;
+    std::array<char, 8192> buf;
+    size_t n;
+    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    int status = pclose(p);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+std::string python_with_numpy()
+{
+    std::vector<std::string> candidates;
+    if (const char *env = std::getenv("MOCAP_PYTHON")) candidates.push_back(env);
+    candidates.push_back("/usr/bin/python3");
+    candidates.push_back("python3");
+    for (const auto &p : candidates)
+        if (std::system(("\"" + p + "\" -c \"import numpy\" >/dev/null 2>&1").c_str()) == 0) return p;
+    return "";
 }

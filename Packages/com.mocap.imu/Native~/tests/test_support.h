@@ -11,3 +11,12 @@ std::string test_temp_path(const std::string &name);
 std::vector<uint8_t> hex_bytes(const std::string &hex); // whitespace ignored
 std::vector<uint8_t> read_file_bytes(const std::string &path);
 void write_file_bytes(const std::string &path, const std::vector<uint8_t> &bytes);
+
+// A shell command's exit code and its stdout and stderr together.
+struct CommandResult {
+    int exit_code = -1;
+    std::string output;
+};
+CommandResult run_shell(const std::string &cmd);
+// A Python that imports numpy: $MOCAP_PYTHON, /usr/bin/python3, then python3 on PATH; "" if none.
+std::string python_with_numpy();

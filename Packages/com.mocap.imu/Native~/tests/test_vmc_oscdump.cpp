@@ -32,23 +32,8 @@ namespace {
 const fs::path kShippedModel =
     fs::path(__FILE__).parent_path() / ".." / ".." / "Runtime" / "Models" / "mocap_pose_fp32.onnx";
 
-struct Result {
-    int exit_code = -1;
-    std::string output;
-};
-
-Result run(const std::string &cmd)
-{
-    Result r;
-    FILE *p = popen((cmd + " 2>&1").c_str(), "r");
-    if (!p) return r;
-    std::array<char, 8192> buf;
-    size_t n;
-    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using Result = CommandResult;
+Result run(const std::string &cmd) { return run_shell(cmd); }
 
 const char *kOscdump = "/usr/bin/oscdump";
 
