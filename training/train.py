@@ -251,6 +251,18 @@ def _lr(step: int, total: int, cfg: TrainConfig, time_frac: float = 0.0) -> floa
     return cfg.lr * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * frac)))
 
 
+def _portable_paths(config: dict) -> dict:
+    """Paths inside the repository as repository-relative, so a committed log names no machine."""
+    out = dict(config)
+    for key, value in config.items():
+        if isinstance(value, str) and os.path.isabs(value):
+            try:
+                out[key] = str(Path(value).resolve().relative_to(REPO.resolve()))
+            except ValueError:
+                pass
+    return out
+
+
 def load_weights(path, device="cpu") -> PoseNet:
     """A PoseNet with the weights of a checkpoint (a training checkpoint or a weights-only one
     written by save_weights)."""
@@ -434,8 +446,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
                "train_clips": len(batcher.motions), "train_frames": batcher.total_frames,
                "best": best, "elapsed_s": time.time() - t_start}
     results_dir.mkdir(parents=True, exist_ok=True)
-    log = {"summary": summary, "train_config": asdict(cfg), "model_config": net.config.to_dict(),
-           "history": history}
+    log = {"summary": summary, "train_config": _portable_paths(asdict(cfg)),
+           "model_config": net.config.to_dict(), "history": history}
     (results_dir / "train_log.json").write_text(json.dumps(log, indent=1))
     plot_losses(history, results_dir / "loss.png")
     print("train: " + json.dumps({k: v for k, v in summary.items() if k != "best"}))

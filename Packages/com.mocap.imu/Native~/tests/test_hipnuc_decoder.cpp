@@ -18,7 +18,7 @@ namespace {
 
 using Bytes = std::vector<uint8_t>;
 
-// Public sample frames (docs: /work/shared/reference/hipnuc-protocol.md).
+// Public sample frames (the project's shared reference: hipnuc-protocol.md beside the checkout).
 const char *kVector1 = // Hi229 manual, 0x91
     "5AA54C006C519100A03B01A80297BDBB04009CA0653EA226453F5CE7303FE2D45AC2E59DA0C1EB23EEC278779941"
     "ABAAD1C1AB2A0AC28DE142428F1DA8C11E0C36C2E6E55A3FC1949E3EB8C09EBEBEDF8DBE";
