@@ -65,19 +65,7 @@ namespace Mocap.Imu.Tests
             for (int j = 0; j < SmplSkeleton.JointCount; j++)
                 SolverReplay.AssertVec(_model.Info.RestOffsets[j], bvh.Joints[map[j]].Offset, 1e-6f, $"{SmplSkeleton.NameOf(j)} offset");
 
-            var smpl = new SmplPose();
-            double worst = 0;
-            for (int f = 0; f < bvh.FrameCount; f++)
-            {
-                bvh.ToSmplPose(f, map, smpl);
-                SolverReplay.AssertVec(_poses[f].RootPosition, smpl.RootPosition, 2e-6f, $"frame {f} root position");
-                for (int j = 0; j < SmplSkeleton.JointCount; j++)
-                {
-                    double deg = Quat.Angle(_poses[f].GetJointRotation(j), smpl.Rotations[j]) * 180.0 / Math.PI;
-                    worst = Math.Max(worst, deg);
-                    Assert.Less(deg, 0.01, $"frame {f} {SmplSkeleton.NameOf(j)}: exported and solved rotations differ by {deg} deg");
-                }
-            }
+            double worst = SolverReplay.AssertBvhMatchesPoses(bvh, map, _poses, "exported and solved");
             // The motion must not be trivially the rest pose, or the comparison proves nothing (the
             // shipped model may be untrained: any joint turning counts).
             double moved = 0;

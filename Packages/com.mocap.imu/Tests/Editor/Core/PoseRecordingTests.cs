@@ -60,19 +60,7 @@ namespace Mocap.Imu.Tests
             var skeleton = bvh.ToSmplSkeleton(map);
             Assert.AreEqual(_model.Info.Skeleton.RestPosition((int)SmplJoint.LeftHand), skeleton.RestPosition((int)SmplJoint.LeftHand));
 
-            var smpl = new SmplPose();
-            double worst = 0;
-            for (int f = 0; f < bvh.FrameCount; f++)
-            {
-                bvh.ToSmplPose(f, map, smpl);
-                SolverReplay.AssertVec(json[f].RootPosition, smpl.RootPosition, 2e-6f, $"frame {f} root position");
-                for (int j = 0; j < SmplSkeleton.JointCount; j++)
-                {
-                    double deg = Quat.Angle(json[f].GetJointRotation(j), smpl.Rotations[j]) * 180.0 / Math.PI;
-                    worst = Math.Max(worst, deg);
-                    Assert.Less(deg, 0.01, $"frame {f} joint {SmplSkeleton.NameOf(j)}: BVH and JSON rotations differ by {deg} deg");
-                }
-            }
+            double worst = SolverReplay.AssertBvhMatchesPoses(bvh, map, json, "BVH and JSON");
             TestContext.WriteLine($"{bvh.FrameCount} frames, worst rotation difference {worst:G3} deg");
         }
 

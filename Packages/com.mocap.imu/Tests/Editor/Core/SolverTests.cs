@@ -84,6 +84,28 @@ namespace Mocap.Imu.Tests
         {
             Assert.IsTrue(e.ApproximatelyEquals(a, tolerance), $"{where}: expected {e}, got {a} (tolerance {tolerance})");
         }
+
+        /// <summary>
+        /// Every frame of <paramref name="bvh"/> equals its pose: root position within 2e-6 m and
+        /// every joint within 0.01 deg. Returns the worst joint angle difference (deg).
+        /// </summary>
+        public static double AssertBvhMatchesPoses(BvhFile bvh, int[] map, IReadOnlyList<MocapPose> poses, string what)
+        {
+            var smpl = new SmplPose();
+            double worst = 0;
+            for (int f = 0; f < bvh.FrameCount; f++)
+            {
+                bvh.ToSmplPose(f, map, smpl);
+                AssertVec(poses[f].RootPosition, smpl.RootPosition, 2e-6f, $"frame {f} root position");
+                for (int j = 0; j < SmplSkeleton.JointCount; j++)
+                {
+                    double deg = Quat.Angle(poses[f].GetJointRotation(j), smpl.Rotations[j]) * 180.0 / Math.PI;
+                    worst = Math.Max(worst, deg);
+                    Assert.Less(deg, 0.01, $"frame {f} {SmplSkeleton.NameOf(j)}: {what} rotations differ by {deg} deg");
+                }
+            }
+            return worst;
+        }
     }
 
     [TestFixture]
