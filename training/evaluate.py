@@ -58,7 +58,7 @@ DRIFT_WINDOWS = (2.0, 5.0, 10.0)
 # heading (the clip's own skeleton and heading are kept).
 def eval_augmentation():
     from .synthesis import Augmentation
-    return Augmentation(scale=(1.0, 1.0), heading=False)
+    return Augmentation(scale=(1.0, 1.0), heading=False, mirror=0.0)
 
 
 TARGETS = {"angle_all": 10.0, "pos": 6.0, "baseline_reduction": 0.40, "params": 4_000_000,

@@ -111,6 +111,24 @@ def leg_height(offsets: np.ndarray = DEFAULT_OFFSETS) -> float:
     return float(o[0, 1] + o[1, 1]) * 1.0
 
 
+# Each joint's counterpart on the other side of the body (itself on the midline).
+MIRROR_JOINTS = [0, 2, 1, 3, 5, 4, 6, 8, 7, 9, 11, 10, 12, 14, 13, 15, 17, 16, 19, 18, 21, 20, 23, 22]
+_REFLECT_X = np.diag([-1.0, 1.0, 1.0])
+
+
+def mirror_motion(local_rot, root_pos, offsets):
+    """The same movement performed mirror-image (reflected in the sagittal plane x = 0, left and
+    right swapped). With M = diag(-1, 1, 1) every global rotation G of joint j becomes M G M on the
+    counterpart joint, and so does every local rotation, since M M = I; positions become M p.
+    Returns (local_rot, root_pos, offsets) as new arrays; applying it twice gives the input back."""
+    m = _REFLECT_X
+    local = np.asarray(local_rot)[..., MIRROR_JOINTS, :, :]
+    local = (m @ local @ m).astype(np.asarray(local_rot).dtype)
+    root = (np.asarray(root_pos) @ m).astype(np.asarray(root_pos).dtype)
+    off = (np.asarray(offsets)[..., MIRROR_JOINTS, :] @ m).astype(np.asarray(offsets).dtype)
+    return local, root, off
+
+
 # ------------------------------------------------------------------------- forward kinematics
 def forward_kinematics(local_rot, root_pos, offsets=DEFAULT_OFFSETS, parents=PARENTS):
     """local_rot (...,J,3,3) with joint 0 global, root_pos (...,3), offsets (J,3) or (...,J,3).

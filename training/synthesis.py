@@ -62,6 +62,7 @@ class Augmentation:
     acc_bias: float = 0.1            # per-axis U(+-x) per sensor per sequence
     drop_rate: float = 0.005         # probability per sensor per frame that a drop-out starts
     drop_max_frames: int = 6         # drop-out length U{1..n} frames: the last sample is held
+    mirror: float = 0.5              # probability that the clip is performed mirror-image
 
 
 @dataclass
@@ -173,6 +174,10 @@ def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K) -> Sam
     root = np.asarray(motion.root_pos, dtype=np.float64).copy()
     offsets = np.asarray(motion.offsets, dtype=np.float64).copy()
     if augment:
+        if augment.mirror > 0 and rng.random() < augment.mirror:
+            # Left-right mirrored motion is as plausible as the original and doubles the variety
+            # of the 6 h of training data (it also removes the subjects' handedness bias).
+            local, root, offsets = sk.mirror_motion(local, root, offsets)
         s = rng.uniform(*augment.scale)
         offsets *= s
         root *= s

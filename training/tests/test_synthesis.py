@@ -65,15 +65,16 @@ def test_sensor_placement_is_on_the_stated_sides():
 
 def test_augmentation_is_seeded_and_bounded():
     m = procedural.make_motion("walk", seconds=3.0, seed=3)
-    a = sy.synthesize(m, np.random.default_rng(7), True)
-    b = sy.synthesize(m, np.random.default_rng(7), True)
-    c = sy.synthesize(m, np.random.default_rng(8), True)
+    unmirrored = sy.Augmentation(mirror=0.0)
+    a = sy.synthesize(m, np.random.default_rng(7), unmirrored)
+    b = sy.synthesize(m, np.random.default_rng(7), unmirrored)
+    c = sy.synthesize(m, np.random.default_rng(8), unmirrored)
     assert np.array_equal(a.imu_acceleration, b.imu_acceleration)
     assert not np.array_equal(a.imu_acceleration, c.imu_acceleration)
     scale = a.offsets[4, 1] / m.offsets[4, 1]
     assert 0.9 <= scale <= 1.1
     clean = sy.synthesize(m)
-    nohead = sy.synthesize(m, np.random.default_rng(7), sy.Augmentation(heading=False))
+    nohead = sy.synthesize(m, np.random.default_rng(7), sy.Augmentation(heading=False, mirror=0.0))
     # orientation errors: a few degrees (mounting + drift + noise), never more than ~15 deg
     # (drop-outs hold an older sample, so compare the median)
     ang = np.degrees(sk.angle_between_rots(nohead.imu_orientation, clean.imu_orientation))
@@ -85,7 +86,7 @@ def test_augmentation_is_seeded_and_bounded():
 def test_heading_augmentation_is_a_pure_yaw():
     m = procedural.make_motion("turn", seconds=3.0, seed=1)
     aug = sy.Augmentation(scale=(1.0, 1.0), mounting_deg=0, heading_drift_deg=0, orientation_noise_deg=0,
-                          acc_noise=0, acc_bias=0, drop_rate=0)
+                          acc_noise=0, acc_bias=0, drop_rate=0, mirror=0.0)
     a = sy.synthesize(m, np.random.default_rng(2), aug)
     c = sy.synthesize(m)
     # same accelerations up to one rotation about Y: norms and vertical components match
@@ -123,3 +124,36 @@ def test_raw_angular_rate_of_a_yaw_spin():
     m.local_rot[:, 0] = np.stack([sy._ry(x) for x in ang])
     raw = sy.raw_sensor_signals(m)
     assert np.allclose(raw["angular_rate"][:, 0], [0.0, 1.5, 0.0], atol=1e-4)
+
+
+MIRROR_ONLY = dict(scale=(1.0, 1.0), heading=False, mounting_deg=0, heading_drift_deg=0,
+                   orientation_noise_deg=0, acc_noise=0, acc_bias=0, drop_rate=0)
+
+
+def test_mirrored_motion_is_the_reflection_with_sides_swapped():
+    m = procedural.make_motion("mixed", seconds=3.0, seed=4)
+    local, root, off = sk.mirror_motion(m.local_rot, m.root_pos, m.offsets)
+    reflect = np.diag([1.0, 1.0, 1.0]); reflect[0, 0] = -1.0
+    _, p = sk.forward_kinematics(m.local_rot, m.root_pos, m.offsets)
+    _, pm = sk.forward_kinematics(local, root, off)
+    # the mirrored left wrist is where the original right wrist was, reflected in x = 0
+    assert np.allclose(pm, p[:, sk.MIRROR_JOINTS] @ reflect, atol=1e-5)
+    assert not np.allclose(pm, p, atol=1e-2)          # the motion is not symmetric itself
+    # still proper rotations, and mirroring twice gives the motion back
+    assert np.allclose(np.linalg.det(local), 1.0, atol=1e-5)
+    back = sk.mirror_motion(local, root, off)
+    for x, y in zip(back, (m.local_rot, m.root_pos, m.offsets)):
+        assert np.allclose(x, y, atol=1e-6)
+
+
+def test_mirror_augmentation_swaps_the_sensors_of_both_sides():
+    m = procedural.make_motion("walk", seconds=3.0, seed=2)
+    plain = sy.synthesize(m)
+    mirrored = sy.synthesize(m, np.random.default_rng(0), sy.Augmentation(**MIRROR_ONLY, mirror=1.0))
+    never = sy.synthesize(m, np.random.default_rng(0), sy.Augmentation(**MIRROR_ONLY, mirror=0.0))
+    reflect = np.diag([-1.0, 1.0, 1.0])
+    swap = [0, 2, 1, 4, 3, 5]                         # sensor order: pelvis, wrists, shins, head
+    assert np.allclose(mirrored.imu_acceleration, plain.imu_acceleration[:, swap] @ reflect, atol=1e-4)
+    assert np.allclose(mirrored.imu_orientation, reflect @ plain.imu_orientation[:, swap] @ reflect, atol=1e-5)
+    assert np.array_equal(mirrored.foot_contact, plain.foot_contact[:, ::-1])
+    assert np.allclose(never.imu_acceleration, plain.imu_acceleration, atol=1e-5)
