@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test suite of the project and ends with one line "N passed, N failed".
 #   engine:       ctest on a normal build, an ASan+UBSan build and (threading suites) a TSan build
-#   fuzz:         the HiPNUC decoder under libFuzzer for a bounded time
+#   fuzz:         the HiPNUC decoder and the capture / calibration file readers under
+#                 libFuzzer for a bounded time
 #   windows:      every engine source cross-compiled for Windows (MinGW-w64, syntax + warnings)
 #   dotnet:       the C# core's NUnit tests against the real native library, and a C# 9 syntax
 #                 check of every file of the Unity package (the Unity glue cannot be compiled here)
@@ -67,21 +68,29 @@ if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
     -DMOCAP_SANITIZE=thread -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
     -- -L threads
 
-  echo "=== fuzz: HiPNUC decoder for ${FUZZ_SECONDS}s"
+  # Three libFuzzer targets: the HiPNUC decoder (the bytes of every device) gets the full time,
+  # the two file readers (capture files, calibration files) half of it each.
   fuzz_dir="$BUILD/fuzz"
+  echo "=== fuzz: decoder ${FUZZ_SECONDS}s, capture and calibration file readers $((FUZZ_SECONDS / 2))s each"
   if CC=clang-14 CXX=clang++-14 cmake -S "$NATIVE" -B "$fuzz_dir" -DMOCAP_FUZZ=ON \
        -DMOCAP_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >"$fuzz_dir.log" 2>&1 &&
-     cmake --build "$fuzz_dir" --target fuzz_hipnuc_decoder -j"$JOBS" >>"$fuzz_dir.log" 2>&1; then
-    corpus="$fuzz_dir/corpus"; mkdir -p "$corpus"
-    if (cd "$fuzz_dir" && ./fuzz/fuzz_hipnuc_decoder -max_total_time="$FUZZ_SECONDS" \
-          -print_final_stats=1 "$corpus" "$NATIVE/fuzz/corpus") >"$fuzz_dir.run.log" 2>&1; then
-      grep -E "stat::number_of_executed_units" "$fuzz_dir.run.log" || true
-      record "fuzz (decoder)" 1 0
-    else
-      tail -40 "$fuzz_dir.run.log"; record "fuzz (decoder)" 0 1
-    fi
+     cmake --build "$fuzz_dir" --target fuzz_hipnuc_decoder fuzz_capture_file fuzz_calibration_file \
+       -j"$JOBS" >>"$fuzz_dir.log" 2>&1; then
+    for target in hipnuc_decoder capture_file calibration_file; do
+      seconds=$FUZZ_SECONDS
+      [ "$target" = hipnuc_decoder ] || seconds=$((FUZZ_SECONDS / 2 > 0 ? FUZZ_SECONDS / 2 : 1))
+      corpus="$fuzz_dir/corpus/$target"; mkdir -p "$corpus"
+      log="$fuzz_dir.$target.run.log"
+      if (cd "$fuzz_dir" && "./fuzz/fuzz_$target" -max_total_time="$seconds" \
+            -print_final_stats=1 "$corpus" "$NATIVE/fuzz/corpus/$target") >"$log" 2>&1; then
+        echo "  $target: $(grep -oE "number_of_executed_units: [0-9]+" "$log" || true)"
+        record "fuzz ($target)" 1 0
+      else
+        tail -40 "$log"; record "fuzz ($target)" 0 1
+      fi
+    done
   else
-    tail -40 "$fuzz_dir.log"; record "fuzz (decoder build)" 0 1
+    tail -40 "$fuzz_dir.log"; record "fuzz (build)" 0 1
   fi
 fi
 
