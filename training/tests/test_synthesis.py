@@ -133,7 +133,7 @@ MIRROR_ONLY = dict(scale=(1.0, 1.0), heading=False, mounting_deg=0, heading_drif
 def test_mirrored_motion_is_the_reflection_with_sides_swapped():
     m = procedural.make_motion("mixed", seconds=3.0, seed=4)
     local, root, off = sk.mirror_motion(m.local_rot, m.root_pos, m.offsets)
-    reflect = np.diag([1.0, 1.0, 1.0]); reflect[0, 0] = -1.0
+    reflect = np.diag([-1.0, 1.0, 1.0])
     _, p = sk.forward_kinematics(m.local_rot, m.root_pos, m.offsets)
     _, pm = sk.forward_kinematics(local, root, off)
     # the mirrored left wrist is where the original right wrist was, reflected in x = 0

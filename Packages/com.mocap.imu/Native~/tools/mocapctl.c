@@ -102,6 +102,17 @@ static int fail(mocap_status st, const char *what)
     return 1;
 }
 
+/* --save-calibration of both replay modes: the session's calibration to path; 0 or 1. */
+static int save_calibration(mocap_session *session, const char *path)
+{
+    mocap_calibration cal;
+    mocap_calibration_get(session, &cal);
+    mocap_status s = mocap_calibration_save(&cal, path);
+    if (s != MOCAP_OK) return fail(s, "saving calibration");
+    printf("  calibration saved to %s\n", path);
+    return 0;
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* synth                                                                                       */
 
@@ -497,16 +508,7 @@ static int cmd_replay(int argc, char **argv)
     }
     while (!ended && !interrupted) ended = pump(st);
 
-    if (save_cal) {
-        mocap_calibration cal;
-        mocap_calibration_get(st->session, &cal);
-        s = mocap_calibration_save(&cal, save_cal);
-        if (s != MOCAP_OK) {
-            rc = fail(s, "saving calibration");
-            goto done;
-        }
-        printf("  calibration saved to %s\n", save_cal);
-    }
+    if (save_cal && save_calibration(st->session, save_cal) != 0) goto done; /* rc is still 1 */
 
     mocap_session_stats stats;
     mocap_session_get_stats(st->session, &stats);
@@ -1139,16 +1141,7 @@ static int cmd_replay_pose(int argc, char **argv)
                !heading_done ? "the heading step" : "the T-pose step");
     const double wall = (double)(mocap_monotonic_ns() - start_ns) * 1e-9;
 
-    if (save_cal) {
-        mocap_calibration cal;
-        mocap_calibration_get(session, &cal);
-        s = mocap_calibration_save(&cal, save_cal);
-        if (s != MOCAP_OK) {
-            rc = fail(s, "saving calibration");
-            goto done;
-        }
-        printf("  calibration saved to %s\n", save_cal);
-    }
+    if (save_cal && save_calibration(session, save_cal) != 0) goto done; /* rc is still 1 */
     mocap_session_stats stats;
     mocap_session_get_stats(session, &stats);
     printf("  %llu bytes, %llu HiPNUC frames, %llu CRC failures, %llu samples (%llu rejected), "

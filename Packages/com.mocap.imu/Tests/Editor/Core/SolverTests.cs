@@ -32,6 +32,18 @@ namespace Mocap.Imu.Tests
             return session;
         }
 
+        /// <summary>Every pose of one character: the capture replayed (calibrated) through a new
+        /// solver of the model as fast as possible.</summary>
+        public static List<MocapPose> SolveOneCharacter(SynthCapture capture, MocapModel model)
+        {
+            using var session = OpenCalibratedReplay(capture, model.Info.FrameRate);
+            using var solver = MocapSolver.Open(model);
+            Assert.AreEqual(0, solver.AddCharacter(session));
+            solver.Start();
+            session.Start();
+            return DrainAll(solver)[0];
+        }
+
         /// <summary>Drains every character until each reports the end of its replay.</summary>
         public static List<MocapPose>[] DrainAll(MocapSolver solver, int capacity = 32)
         {

@@ -93,12 +93,7 @@ namespace Mocap.Imu.Tests
             TestPaths.RequireEngine();
             var capture = TestPaths.Synth("walk", seconds: 6, seed: 3);
             _model = MocapModel.Open(TestPaths.ModelPath);
-            using var session = SolverReplay.OpenCalibratedReplay(capture, _model.Info.FrameRate);
-            using var solver = MocapSolver.Open(_model);
-            solver.AddCharacter(session);
-            solver.Start();
-            session.Start();
-            _poses = SolverReplay.DrainAll(solver)[0];
+            _poses = SolverReplay.SolveOneCharacter(capture, _model);
             Assert.Greater(_poses.Count, 60, "the replay produced too few poses to stream");
         }
 
