@@ -113,6 +113,10 @@ namespace Mocap.Imu
         public float floorHeight;
         [Tooltip("Only calibrated frames are solved.")]
         public bool requireCalibration = true;
+        [Tooltip("Output smoothing: cut-off frequency (Hz) for a joint at rest. Lower is smoother; 0 = off (the model's raw output).")]
+        [Min(0f)] public float smoothingMinCutoffHz = 1f;
+        [Tooltip("How much fast motion bypasses the smoothing (Hz per rad/s of joint speed): higher = less lag on fast moves.")]
+        [Min(0f)] public float smoothingBeta = 2f;
 
         [Header("Characters (one sensor set each)")]
         public List<MocapCharacterSource> characters = new List<MocapCharacterSource> { new MocapCharacterSource() };
@@ -153,6 +157,8 @@ namespace Mocap.Imu
                 ContactThreshold = contactThreshold,
                 FloorHeight = floorHeight,
                 RequireCalibration = requireCalibration,
+                SmoothingMinCutoffHz = smoothingMinCutoffHz,
+                SmoothingBeta = smoothingBeta,
             };
         }
 

@@ -39,7 +39,7 @@ extern "C" {
 #  define MOCAP_API
 #endif
 
-#define MOCAP_API_VERSION 2
+#define MOCAP_API_VERSION 3
 #define MOCAP_SENSOR_COUNT 6
 #define MOCAP_PATH_MAX 260
 
@@ -381,6 +381,12 @@ typedef struct mocap_solver_config {
     float floor_height;        /* metres, model frame (0) */
     int32_t drift_correction;  /* 1: planted feet do not slide and stay on the floor (default) */
     int32_t require_calibration; /* 1: only calibrated frames are solved (default) */
+    /* Output smoothing, a one-euro filter per joint rotation: the cut-off frequency is
+     * smoothing_min_cutoff_hz for a joint at rest and rises by smoothing_beta Hz per rad/s of the
+     * joint's speed, so slow motion loses its jitter and fast motion does not lag.
+     * smoothing_min_cutoff_hz = 0 turns it off (the model's raw output). Defaults 1.0 Hz, 2.0. */
+    float smoothing_min_cutoff_hz;
+    float smoothing_beta;
 } mocap_solver_config;
 
 /* Pose flags. */

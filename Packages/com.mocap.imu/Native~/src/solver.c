@@ -12,6 +12,7 @@
 #include "error.h"
 #include "mocap_math.h"
 #include "platform.h"
+#include "pose_filter.h"
 #include "session_internal.h"
 #include "skeleton_fk.h"
 #include "spsc_ring.h"
@@ -35,6 +36,7 @@ typedef struct character {
     int session_ended;
     int64_t last_frame_ns;      /* monotonic time a frame last became pending (0: never) */
     drift_state drift;
+    pose_filter_state smoothing;
     uint64_t pose_sequence;
     int have_last_pose;
     mocap_pose last_pose;
@@ -54,6 +56,7 @@ struct mocap_solver {
     mocap_solver_config config;
     skeleton sk;
     drift_params drift;
+    pose_filter_params smoothing;
     int L, H;
     int64_t period_ns;
     character *chars[MOCAP_MAX_CHARACTERS];
@@ -156,6 +159,9 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
     double q[MOCAP_JOINT_COUNT][4];
     double rel[MOCAP_JOINT_COUNT][3];
     for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, q[j]);
+    /* Before forward kinematics, so joint positions and the feet that drift correction pins
+     * are those of the smoothed pose. */
+    pose_filter_step(&ch->smoothing, &s->smoothing, q, MOCAP_JOINT_COUNT);
     const double zero[3] = {0, 0, 0};
     skeleton_fk(&s->sk, (const double (*)[4])q, zero, NULL, rel);
     if (!ch->drift.initialized) drift_reset(&ch->drift, s->sk.offsets[0]);
@@ -202,6 +208,7 @@ static void reset_character_state(mocap_solver *s, character *ch)
     memset(ch->state_h, 0, n * sizeof(float));
     memset(ch->state_c, 0, n * sizeof(float));
     ch->drift.initialized = 0;
+    pose_filter_reset(&ch->smoothing);
     ch->have_last_pose = 0;
 }
 
@@ -402,6 +409,8 @@ mocap_status mocap_solver_config_defaults(mocap_solver_config *c)
     c->floor_height = 0.0f;
     c->drift_correction = 1;
     c->require_calibration = 1;
+    c->smoothing_min_cutoff_hz = 1.0f;
+    c->smoothing_beta = 2.0f;
     return MOCAP_OK;
 }
 
@@ -426,6 +435,12 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
                           (double)cfg.contact_threshold);
     if (!isfinite(cfg.floor_height))
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "floor_height is not finite");
+    if (!(cfg.smoothing_min_cutoff_hz >= 0.0f && cfg.smoothing_min_cutoff_hz < 1e6f))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "smoothing_min_cutoff_hz %g is not a frequency "
+                          "(0 turns smoothing off)", (double)cfg.smoothing_min_cutoff_hz);
+    if (!(cfg.smoothing_beta >= 0.0f && cfg.smoothing_beta < 1e6f))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "smoothing_beta %g is outside 0..1e6",
+                          (double)cfg.smoothing_beta);
     const mocap_model_info *info = model_info(model);
     if (!(info->frame_rate > 0.0f) || info->state_layers < 1 || info->state_size < 1)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "model info is not usable");
@@ -444,6 +459,10 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
     s->H = info->state_size;
     s->period_ns = (int64_t)(1e9 / info->frame_rate);
     s->drift.dt = 1.0 / info->frame_rate;
+    s->smoothing.dt = 1.0 / info->frame_rate;
+    s->smoothing.min_cutoff_hz = cfg.smoothing_min_cutoff_hz;
+    s->smoothing.beta = cfg.smoothing_beta;
+    s->smoothing.speed_cutoff_hz = 1.0;
     s->drift.contact_threshold = cfg.contact_threshold;
     s->drift.floor_height = cfg.floor_height;
     s->drift.foot_height[0] = s->sk.foot_height[0];

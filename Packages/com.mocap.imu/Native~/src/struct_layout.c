@@ -123,6 +123,8 @@ static const mocap_field_layout layout_table[] = {
     FIELD_ROW(mocap_solver_config, floor_height),
     FIELD_ROW(mocap_solver_config, drift_correction),
     FIELD_ROW(mocap_solver_config, require_calibration),
+    FIELD_ROW(mocap_solver_config, smoothing_min_cutoff_hz),
+    FIELD_ROW(mocap_solver_config, smoothing_beta),
 
     STRUCT_ROW(mocap_pose),
     FIELD_ROW(mocap_pose, sequence),

@@ -87,7 +87,11 @@ int main(int argc, char **argv)
                                    (float)(tpose_s - 1.0)) != MOCAP_OK)
         return fail("calibration schedule");
     mocap_solver *solver = NULL;
-    if (mocap_solver_open(model, NULL, &solver) != MOCAP_OK) return fail("solver");
+    /* The golden test compares the model's own output with PyTorch: no output smoothing. */
+    mocap_solver_config solver_config;
+    mocap_solver_config_defaults(&solver_config);
+    solver_config.smoothing_min_cutoff_hz = 0.0f;
+    if (mocap_solver_open(model, &solver_config, &solver) != MOCAP_OK) return fail("solver");
     int32_t ch = -1;
     if (mocap_solver_add_character(solver, session, &ch) != MOCAP_OK) return fail("add character");
     tap_log log = {0};

@@ -171,3 +171,23 @@ TEST_F(MocapctlPose, SensorTruthWithTheModelIsRefusedClearly)
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("worst sensor mean"), std::string::npos) << r.output;
 }
+
+TEST_F(MocapctlPose, SmoothingOptionLowersJitterAndRejectsBadValues)
+{
+    auto jitter = [&](const std::string &extra) {
+        Result r = mocapctl("replay " + capture + " --truth " + truth_csv + extra);
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        std::smatch m;
+        EXPECT_TRUE(std::regex_search(r.output, m, std::regex("jitter: ([0-9.]+) x10"))) << r.output;
+        return m.empty() ? 0.0 : std::stod(m[1]);
+    };
+    double raw = jitter(" --smoothing 0"), standard = jitter(""), strong = jitter(" --smoothing 0.5,0.5");
+    EXPECT_GT(raw, 0.0);
+    EXPECT_LT(standard, raw / 2.0) << "raw " << raw << " default " << standard;
+    EXPECT_LT(strong, standard) << "default " << standard << " 0.5,0.5 " << strong;
+    for (const char *bad : {"abc", "1,", "-1", "1,-2", "nan"}) {
+        Result r = mocapctl("replay " + capture + " --truth " + truth_csv + " --smoothing " + bad);
+        EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find("--smoothing wants"), std::string::npos) << r.output;
+    }
+}

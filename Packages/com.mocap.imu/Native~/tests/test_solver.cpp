@@ -402,6 +402,87 @@ TEST(Solver, ReplaySolvedEndToEnd)
     report_timing(solver.s, "1 character");
 }
 
+// The poses of one replay solved with the given solver config (nullptr: defaults).
+std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap, const synth_config &cfg,
+                                     const mocap_solver_config *config)
+{
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));
+    Solver solver;
+    std::vector<std::vector<mocap_pose>> poses;
+    int32_t ch = -1;
+    if (!sessions.list[0] || mocap_solver_open(model, config, &solver.s) != MOCAP_OK ||
+        mocap_solver_add_character(solver.s, sessions.list[0], &ch) != MOCAP_OK ||
+        mocap_solver_start(solver.s) != MOCAP_OK || mocap_session_start(sessions.list[0]) != MOCAP_OK) {
+        ADD_FAILURE() << mocap_last_error();
+        return {};
+    }
+    EXPECT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    return poses[0];
+}
+
+// Mean |third difference| of the root-relative joint positions (m per frame^3): jitter.
+double mean_jerk(const std::vector<mocap_pose> &poses)
+{
+    double sum = 0.0;
+    size_t n = 0;
+    for (size_t t = 3; t < poses.size(); ++t)
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            double d2 = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                auto rel = [&](size_t i) {
+                    return (double)poses[i].joint_positions[j][k] - poses[i].root_position[k];
+                };
+                double d = rel(t) - 3.0 * rel(t - 1) + 3.0 * rel(t - 2) - rel(t - 3);
+                d2 += d * d;
+            }
+            sum += std::sqrt(d2);
+            ++n;
+        }
+    return n ? sum / n : 0.0;
+}
+
+TEST(Solver, SmoothingRemovesJitterAndCanBeTurnedOff)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = test_temp_path("smooth.cap");
+    synth_config cfg = short_capture(21, 6.0, "mixed", cap);
+    mocap_solver_config off;
+    mocap_solver_config_defaults(&off);
+    off.smoothing_min_cutoff_hz = 0.0f;
+    std::vector<mocap_pose> raw = solve_replay(model.m, cap, cfg, &off);
+    std::vector<mocap_pose> raw_again = solve_replay(model.m, cap, cfg, &off);
+    std::vector<mocap_pose> smooth = solve_replay(model.m, cap, cfg, nullptr);
+    ASSERT_GT(raw.size(), 300u);
+    ASSERT_EQ(smooth.size(), raw.size());
+    ASSERT_EQ(raw_again.size(), raw.size());
+    // off: the model's output as it is (a replay is deterministic)
+    EXPECT_EQ(0, memcmp(raw.back().joint_rotations, raw_again.back().joint_rotations,
+                        sizeof raw.back().joint_rotations));
+    // on: the same motion (a few degrees from the raw output on average) with far less jitter
+    double angle = 0.0;
+    size_t count = 0;
+    for (size_t t = 0; t < raw.size(); ++t)
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            double a[4], b[4];
+            for (int k = 0; k < 4; ++k) {
+                a[k] = raw[t].joint_rotations[j][k];
+                b[k] = smooth[t].joint_rotations[j][k];
+            }
+            angle += quat_angle_deg(a, b);
+            ++count;
+        }
+    angle /= (double)count;
+    EXPECT_GT(angle, 0.05);
+    EXPECT_LT(angle, 4.0);
+    double jr = mean_jerk(raw), js = mean_jerk(smooth);
+    printf("smoothing: mean %.2f deg from the raw output, jerk %.3g -> %.3g m/frame^3\n", angle, jr, js);
+    EXPECT_LT(js, jr / 2.0) << "jerk raw " << jr << " smoothed " << js;
+    check_poses(smooth, [&] { mocap_model_info i; mocap_model_get_info(model.m, &i); return i; }(), 0);
+}
+
 // Three characters from three replays are solved in batched inference calls.
 TEST(Solver, ThreeReplaysAreBatchedInOneCallPerTick)
 {
@@ -659,10 +740,22 @@ TEST(Solver, ConfigIsValidated)
     EXPECT_FLOAT_EQ(c.contact_threshold, 0.5f);
     EXPECT_EQ(c.drift_correction, 1);
     EXPECT_EQ(c.require_calibration, 1);
+    EXPECT_FLOAT_EQ(c.smoothing_min_cutoff_hz, 1.0f);
+    EXPECT_FLOAT_EQ(c.smoothing_beta, 2.0f);
     mocap_solver *s = nullptr;
     c.contact_threshold = 1.5f;
     EXPECT_EQ(mocap_solver_open(model.m, &c, &s), MOCAP_ERR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(mocap_last_error()).find("contact_threshold"), std::string::npos);
+    for (float bad : {-1.0f, NAN, INFINITY}) {
+        mocap_solver_config_defaults(&c);
+        c.smoothing_min_cutoff_hz = bad;
+        EXPECT_EQ(mocap_solver_open(model.m, &c, &s), MOCAP_ERR_INVALID_ARGUMENT);
+        EXPECT_NE(std::string(mocap_last_error()).find("smoothing_min_cutoff_hz"), std::string::npos);
+        mocap_solver_config_defaults(&c);
+        c.smoothing_beta = bad;
+        EXPECT_EQ(mocap_solver_open(model.m, &c, &s), MOCAP_ERR_INVALID_ARGUMENT);
+        EXPECT_NE(std::string(mocap_last_error()).find("smoothing_beta"), std::string::npos);
+    }
     mocap_solver_config_defaults(&c);
     c.struct_size = 8;
     EXPECT_EQ(mocap_solver_open(model.m, &c, &s), MOCAP_ERR_INVALID_ARGUMENT);
@@ -693,6 +786,9 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         {"mocap_model_info", "joint_names", offsetof(mocap_model_info, joint_names), 24 * 32},
         {"mocap_model_options", "onnxruntime_path", offsetof(mocap_model_options, onnxruntime_path), MOCAP_PATH_MAX},
         {"mocap_solver_config", "require_calibration", offsetof(mocap_solver_config, require_calibration), 4},
+        {"mocap_solver_config", "smoothing_min_cutoff_hz", offsetof(mocap_solver_config, smoothing_min_cutoff_hz), 4},
+        {"mocap_solver_config", "smoothing_beta", offsetof(mocap_solver_config, smoothing_beta), 4},
+        {"mocap_solver_config", "", 0, sizeof(mocap_solver_config)},
     };
     for (const auto &e : expected) {
         const mocap_field_layout *r = find(e.s, e.f);
@@ -700,5 +796,5 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->offset, e.offset) << e.s << "." << e.f;
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
-    EXPECT_EQ(mocap_api_version(), 2);
+    EXPECT_EQ(mocap_api_version(), 3);
 }

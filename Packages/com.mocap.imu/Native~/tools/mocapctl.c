@@ -6,14 +6,19 @@
  *                    [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]
  *   mocapctl replay  CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]
  *                    [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]
+ *                    [--smoothing HZ[,BETA]]
  *                    (with the pose model: decode -> filter -> calibrate -> model -> drift;
  *                    used when --model, --out, --json, --pose-csv or a pose truth is given;
  *                    default model: the shipped fp32 one)
  *   mocapctl live    --port DEV [--baud 460800] [--record CAPTURE] [--seconds N] [--model M | --pose]
+ *                    [--smoothing HZ[,BETA]]
  *   mocapctl record  --port DEV --out CAPTURE [--baud 460800] [--seconds N]
  *   mocapctl stream  --vmc HOST:PORT [--vmc HOST2:PORT2 ...] (--replay CAPTURE [--replay C2 ...]
  *                    [--realtime] [--speed X] | --port DEV [--baud B]) [--model M] [--rate HZ]
- *                    [--seconds S] [--allow-remote]   (poses -> VMC protocol, character i -> i-th --vmc)
+ *                    [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]
+ *                    (poses -> VMC protocol, character i -> i-th --vmc)
+ * --smoothing: the solver's one-euro output filter, cut-off at rest (Hz) and its rise per rad/s
+ *              of joint speed; default 1,2; 0 = the model's raw output.
  *   mocapctl bench   decode [--seconds S]
  *   mocapctl bench   pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]
  *                    [--tip-model F] [--max-characters N]                     (tools/bench.c)
@@ -67,11 +72,13 @@ static int usage(void)
             "                 [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]\n"
             "  mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
             "                 [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
+            "                 [--smoothing HZ[,BETA]]   (output filter; default 1,2; 0 = off)\n"
             "  mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
+            "                 [--smoothing HZ[,BETA]]\n"
             "  mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S]\n"
             "  mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...] [--realtime]\n"
             "                 [--speed X] | --port DEV [--baud B]) [--model M] [--rate HZ] [--seconds S]\n"
-            "                 [--allow-remote]\n"
+            "                 [--allow-remote] [--smoothing HZ[,BETA]]\n"
             "  mocapctl bench decode [--seconds S]\n"
             "  mocapctl bench pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]\n"
             "                 [--tip-model F] [--max-characters N]\n"
@@ -100,6 +107,31 @@ static int fail(mocap_status st, const char *what)
 {
     fprintf(stderr, "mocapctl: %s: %s (%s)\n", what, mocap_last_error(), mocap_status_name(st));
     return 1;
+}
+
+/* The solver options of the pose commands: --smoothing HZ[,BETA] (one-euro output filter:
+ * cut-off at rest, Hz, and its rise per rad/s; 0 = the model's raw output). 0 or 2 (usage). */
+static int solver_config_from_args(int argc, char **argv, mocap_solver_config *out)
+{
+    mocap_solver_config_defaults(out);
+    const char *smoothing = arg_value(argc, argv, "--smoothing");
+    if (!smoothing) return 0;
+    char *end = NULL;
+    double hz = strtod(smoothing, &end), beta = out->smoothing_beta;
+    int bad = end == smoothing;
+    if (!bad && *end == ',') {
+        const char *b = end + 1;
+        beta = strtod(b, &end);
+        bad = end == b;
+    }
+    if (bad || *end != '\0' || !(hz >= 0.0 && hz < 1e6) || !(beta >= 0.0 && beta < 1e6)) {
+        fprintf(stderr, "mocapctl: --smoothing wants HZ or HZ,BETA with HZ >= 0 (0: off) and "
+                        "BETA >= 0, got '%s'\n", smoothing);
+        return 2;
+    }
+    out->smoothing_min_cutoff_hz = (float)hz;
+    out->smoothing_beta = (float)beta;
+    return 0;
 }
 
 /* --save-calibration of both replay modes: the session's calibration to path; 0 or 1. */
@@ -990,6 +1022,8 @@ static int report_step_once(mocap_session *session, int step, const char *label,
 static int cmd_replay_pose(int argc, char **argv)
 {
     const char *capture = argv[0];
+    mocap_solver_config solver_config;
+    if (solver_config_from_args(argc, argv, &solver_config) != 0) return 2;
     const char *model_arg = arg_value(argc, argv, "--model");
     const char *out_path = arg_value(argc, argv, "--out");
     const char *json_path = arg_value(argc, argv, "--json");
@@ -1070,7 +1104,7 @@ static int cmd_replay_pose(int argc, char **argv)
     cfg.output_rate_hz = info.frame_rate;
     if (open_replay_session(capture, &cfg, prelude, cal_path, &session) != 0) goto done;
     int32_t character = -1;
-    s = mocap_solver_open(model, NULL, &solver);
+    s = mocap_solver_open(model, &solver_config, &solver);
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &character);
     if (s == MOCAP_OK) s = mocap_solver_start(solver);
     if (s == MOCAP_OK) s = mocap_session_start(session);
@@ -1290,11 +1324,12 @@ static void show_status_until(mocap_session *session, double limit_s)
 
 /* After calibration with --model: the solver consumes the session; prints the pose status
  * (fps, root height and position, foot contacts, flags) ten times a second. */
-static int show_poses_until(mocap_session *session, mocap_model *model, double limit_s)
+static int show_poses_until(mocap_session *session, mocap_model *model,
+                            const mocap_solver_config *config, double limit_s)
 {
     mocap_solver *solver = NULL;
     int32_t id = -1;
-    mocap_status s = mocap_solver_open(model, NULL, &solver);
+    mocap_status s = mocap_solver_open(model, config, &solver);
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &id);
     if (s == MOCAP_OK) s = mocap_solver_start(solver);
     if (s != MOCAP_OK) {
@@ -1380,6 +1415,8 @@ static int guided_step(mocap_session *session, int step, const char *instruction
 static int cmd_live(int argc, char **argv)
 {
     mocap_session *session = NULL;
+    mocap_solver_config solver_config;
+    if (solver_config_from_args(argc, argv, &solver_config) != 0) return 2;
     const char *record = arg_value(argc, argv, "--record");
     const char *seconds = arg_value(argc, argv, "--seconds");
     const int with_model = arg_value(argc, argv, "--model") != NULL || arg_flag(argc, argv, "--pose");
@@ -1407,7 +1444,7 @@ static int cmd_live(int argc, char **argv)
     }
     if (rc == 0) printf("\nCalibrated. Streaming; Ctrl-C to stop.\n");
     if (rc == 0 && model) {
-        rc = show_poses_until(session, model, limit);
+        rc = show_poses_until(session, model, &solver_config, limit);
     } else {
         show_status_until(session, limit);
     }
@@ -1465,6 +1502,8 @@ static int cmd_stream(int argc, char **argv)
     const char *seconds = arg_value(argc, argv, "--seconds");
     const char *speed = arg_value(argc, argv, "--speed");
     const char *prelude = arg_value(argc, argv, "--prelude");
+    mocap_solver_config solver_config;
+    if (solver_config_from_args(argc, argv, &solver_config) != 0) return 2;
     if (ndest < 0 || nrep < 0) {
         fprintf(stderr, "mocapctl: at most %d --vmc and --replay\n", STREAM_MAX);
         return 2;
@@ -1530,7 +1569,7 @@ static int cmd_stream(int argc, char **argv)
             if (open_replay_session(replays[i], &cfg, prelude, NULL, &sessions[i]) != 0) goto done;
         }
     }
-    s = mocap_solver_open(model, NULL, &solver);
+    s = mocap_solver_open(model, &solver_config, &solver);
     for (int i = 0; s == MOCAP_OK && i < characters; ++i)
         s = mocap_solver_add_character(solver, sessions[i], &ids[i]);
     if (s == MOCAP_OK) s = mocap_solver_start(solver);

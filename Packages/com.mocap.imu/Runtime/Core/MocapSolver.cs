@@ -10,7 +10,7 @@ namespace Mocap.Imu
     public sealed class SolverConfig
     {
         /// <summary>The engine's defaults (0.5 contact threshold, floor at 0, drift correction on,
-        /// only calibrated frames solved).</summary>
+        /// only calibrated frames solved, output smoothing 1 Hz / 2).</summary>
         public unsafe SolverConfig()
         {
             MocapEngine.EnsureCompatible();
@@ -20,6 +20,8 @@ namespace Mocap.Imu
             FloorHeight = native.FloorHeight;
             DriftCorrection = native.DriftCorrection != 0;
             RequireCalibration = native.RequireCalibration != 0;
+            SmoothingMinCutoffHz = native.SmoothingMinCutoffHz;
+            SmoothingBeta = native.SmoothingBeta;
         }
 
         /// <summary>Foot contact probability that counts as planted, 0..1.</summary>
@@ -30,6 +32,12 @@ namespace Mocap.Imu
         public bool DriftCorrection { get; set; }
         /// <summary>Only calibrated frames are solved.</summary>
         public bool RequireCalibration { get; set; }
+        /// <summary>Output smoothing (a one-euro filter per joint): cut-off frequency in Hz for a
+        /// joint at rest. Lower is smoother; 0 turns smoothing off (the model's raw output).</summary>
+        public float SmoothingMinCutoffHz { get; set; }
+        /// <summary>How much the cut-off rises with joint speed (Hz per rad/s): higher lets fast
+        /// motion through with less lag.</summary>
+        public float SmoothingBeta { get; set; }
 
         internal unsafe void ToNative(out NativeSolverConfig native)
         {
@@ -39,6 +47,8 @@ namespace Mocap.Imu
             native.FloorHeight = FloorHeight;
             native.DriftCorrection = DriftCorrection ? 1 : 0;
             native.RequireCalibration = RequireCalibration ? 1 : 0;
+            native.SmoothingMinCutoffHz = SmoothingMinCutoffHz;
+            native.SmoothingBeta = SmoothingBeta;
         }
     }
 

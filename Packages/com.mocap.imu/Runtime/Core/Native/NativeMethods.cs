@@ -27,7 +27,7 @@ namespace Mocap.Imu
         internal const string Library = "mocap_imu";
 
         /// <summary>MOCAP_API_VERSION these bindings mirror.</summary>
-        internal const int ApiVersion = 2;
+        internal const int ApiVersion = 3;
 
         internal const int SensorCount = 6;
         internal const int PathMax = 260;

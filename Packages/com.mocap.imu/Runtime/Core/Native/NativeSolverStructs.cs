@@ -45,6 +45,8 @@ namespace Mocap.Imu
         [NativeName("floor_height")] public float FloorHeight;
         [NativeName("drift_correction")] public int DriftCorrection;
         [NativeName("require_calibration")] public int RequireCalibration;
+        [NativeName("smoothing_min_cutoff_hz")] public float SmoothingMinCutoffHz;
+        [NativeName("smoothing_beta")] public float SmoothingBeta;
     }
 
     [NativeName("mocap_pose")]

@@ -34,10 +34,11 @@ namespace Mocap.Imu.Tests
 
         /// <summary>Every pose of one character: the capture replayed (calibrated) through a new
         /// solver of the model as fast as possible.</summary>
-        public static List<MocapPose> SolveOneCharacter(SynthCapture capture, MocapModel model)
+        public static List<MocapPose> SolveOneCharacter(SynthCapture capture, MocapModel model,
+                                                        SolverConfig config = null)
         {
             using var session = OpenCalibratedReplay(capture, model.Info.FrameRate);
-            using var solver = MocapSolver.Open(model);
+            using var solver = MocapSolver.Open(model, config);
             Assert.AreEqual(0, solver.AddCharacter(session));
             solver.Start();
             session.Start();
@@ -374,6 +375,35 @@ namespace Mocap.Imu.Tests
             var bad = new SolverConfig { ContactThreshold = 2f };
             e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model, bad));
             StringAssert.Contains("contact_threshold", e.Message);
+            bad = new SolverConfig { SmoothingMinCutoffHz = -1f };
+            e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model, bad));
+            StringAssert.Contains("smoothing_min_cutoff_hz", e.Message);
+        }
+
+        [Test]
+        public void SmoothingSettingsReachTheEngine()
+        {
+            var defaults = new SolverConfig();
+            Assert.AreEqual(1f, defaults.SmoothingMinCutoffHz);
+            Assert.AreEqual(2f, defaults.SmoothingBeta);
+            var raw = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingMinCutoffHz = 0f });
+            var strong = SolverReplay.SolveOneCharacter(_capture, _model,
+                new SolverConfig { SmoothingMinCutoffHz = 0.5f, SmoothingBeta = 0.5f });
+            Assert.AreEqual(_poses.Count, raw.Count);
+            Assert.AreEqual(_poses.Count, strong.Count);
+            // frame-to-frame rotation of every joint, summed: the jitter a viewer sees; the
+            // defaults (the fixture's poses) sit between raw and strong smoothing
+            double Motion(List<MocapPose> poses)
+            {
+                double sum = 0;
+                for (int i = 1; i < poses.Count; i++)
+                    for (int j = 0; j < MocapPose.JointCount; j++)
+                        sum += Quat.Angle(poses[i].GetJointRotation(j), poses[i - 1].GetJointRotation(j));
+                return sum;
+            }
+            double r = Motion(raw), d = Motion(_poses), s = Motion(strong);
+            Assert.Less(d, r, $"default {d} vs raw {r}");
+            Assert.Less(s, d, $"strong {s} vs default {d}");
         }
 
         [Test]
