@@ -55,10 +55,10 @@ DRIFT_WINDOWS = (2.0, 5.0, 10.0)
 # Evaluation inputs: synthesis.Augmentation with its realistic sensor errors (per-sensor
 # mounting/calibration error, sensor-world yaw error, orientation noise, accelerometer noise and
 # bias, short drop-outs holding the last sample) and nothing else: no body scaling, no random
-# heading (the clip's own skeleton and heading are kept).
+# heading, no mirroring, no tempo change (the clip's own skeleton, heading and timing are kept).
 def eval_augmentation():
     from .synthesis import Augmentation
-    return Augmentation(scale=(1.0, 1.0), heading=False, mirror=0.0)
+    return Augmentation(scale=(1.0, 1.0), heading=False, mirror=0.0, speed=(1.0, 1.0))
 
 
 TARGETS = {"angle_all": 10.0, "pos": 6.0, "baseline_reduction": 0.40, "params": 4_000_000,

@@ -26,7 +26,7 @@ Only export-friendly ops are used (matmul, slicing, elementwise, LSTM, no atan2)
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, asdict
+from dataclasses import dataclass, asdict, replace
 
 import torch
 import torch.nn as nn
@@ -44,6 +44,7 @@ class ModelConfig:
     hidden: int = 384         # LSTM state size H
     layers: int = 2           # LSTM layers L
     head: int = 256           # output MLP width
+    dropout: float = 0.0      # training only: after the frame MLP, between and after LSTM layers
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -117,12 +118,13 @@ class PoseNet(nn.Module):
 
     def __init__(self, config: ModelConfig | None = None):
         super().__init__()
-        self.config = config or ModelConfig()
+        self.config = replace(config) if config else ModelConfig()   # own copy: set_dropout edits it
         c = self.config
         self.embed = nn.Sequential(
             nn.Linear(FEATURE_SIZE, c.embed), nn.ReLU(),
             nn.Linear(c.embed, c.embed), nn.ReLU())
-        self.lstm = nn.LSTM(c.embed, c.hidden, num_layers=c.layers, batch_first=True)
+        self.lstm = nn.LSTM(c.embed, c.hidden, num_layers=c.layers, batch_first=True,
+                            dropout=c.dropout if c.layers > 1 else 0.0)
         self.head = nn.Sequential(nn.Linear(c.hidden, c.head), nn.ReLU(),
                                   nn.Linear(c.head, OUTPUT_SIZE))
         # Small last layer: an untrained model outputs roughly the rest pose with the measured
@@ -132,6 +134,11 @@ class PoseNet(nn.Module):
             self.head[-1].bias.zero_()
         ident = torch.tensor([1.0, 0.0, 0.0, 0.0, 1.0, 0.0])
         self.register_buffer("identity6d", ident, persistent=False)
+
+    def set_dropout(self, p: float) -> None:
+        """Dropout has no weights, so a warm start can change it."""
+        self.config.dropout = float(p)
+        self.lstm.dropout = float(p) if self.config.layers > 1 else 0.0
 
     @property
     def state_layers(self) -> int:
@@ -164,10 +171,15 @@ class PoseNet(nn.Module):
         """Returns (joint_rotations, root_velocity, contact_logits, (h, c))."""
         b, t = ori.shape[0], ori.shape[1]
         feat, ry, pelvis_h = self.features(ori, acc)
+        p = self.config.dropout if self.training else 0.0
         x = self.embed(feat)
+        if p > 0:
+            x = torch.nn.functional.dropout(x, p, True)
         if state is None:
             state = self.zero_state(b, ori.device)
         y, (h, c) = self.lstm(x, (state[0], state[1]))
+        if p > 0:
+            y = torch.nn.functional.dropout(y, p, True)
         out = self.head(y)
         rot6 = out[..., :NUM_JOINTS * 6].reshape(b, t, NUM_JOINTS, 6)
         base0 = matrix_to_rot6d(pelvis_h).unsqueeze(2)                  # (B,T,1,6)

@@ -63,6 +63,7 @@ class Augmentation:
     drop_rate: float = 0.005         # probability per sensor per frame that a drop-out starts
     drop_max_frames: int = 6         # drop-out length U{1..n} frames: the last sample is held
     mirror: float = 0.5              # probability that the clip is performed mirror-image
+    speed: tuple = (0.8, 1.2)        # playback speed U(a, b): the same motion done faster or slower
 
 
 @dataclass
@@ -174,6 +175,13 @@ def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K) -> Sam
     root = np.asarray(motion.root_pos, dtype=np.float64).copy()
     offsets = np.asarray(motion.offsets, dtype=np.float64).copy()
     if augment:
+        if tuple(augment.speed) != (1.0, 1.0):
+            # People do the same movement at different tempos; CMU has one take per subject and
+            # action. Slerp resampling keeps the rotations on the rotation group, and root speed,
+            # sensor accelerations (synthesised below) and contacts all follow the new tempo.
+            from .retarget import resample
+            f = rng.uniform(*augment.speed)
+            local, root = resample(local, root, 1.0 / (fps * f), fps)
         if augment.mirror > 0 and rng.random() < augment.mirror:
             # Left-right mirrored motion is as plausible as the original and doubles the variety
             # of the 6 h of training data (it also removes the subjects' handedness bias).

@@ -14,8 +14,9 @@ start, otherwise at a random frame). So the network is trained both for a cold s
 as at the start of every engine session) and for long runs with a warm state; a plain
 "zero state at every random window" scheme would only ever see states at most W frames old.
 
-Losses per frame: rotation (squared Frobenius distance of the 24 matrices: local, joint 0
-global), joint positions (mean distance of root-relative joints after forward kinematics of the
+Losses per frame: rotation (Frobenius distance of the 24 matrices, local, joint 0 global: the
+chordal distance 2 sqrt(2) sin(angle / 2), which grows like the angle the metric averages; the
+squared distance of earlier runs pulls ambiguous joints to the mean of their possible poses), joint positions (mean distance of root-relative joints after forward kinematics of the
 predicted rotations on the sample's own skeleton), root velocity (MSE, m/s), root drift
 (displacement error accumulated over 1 s inside the window), foot contact (BCE on logits).
 
@@ -65,6 +66,9 @@ class TrainConfig:
     w_vel: float = 1.0
     w_drift: float = 2.0
     w_contact: float = 0.5
+    rot_loss: str = "chordal"         # "chordal": Frobenius distance per joint (~ angle, like the
+                                      # metric); "squared": its square (punishes outliers more)
+    dropout: float | None = 0.1       # PoseNet dropout in training (None: the checkpoint's own)
     drift_frames: int = 60
     eval_every_s: float = 180.0
     ckpt_every_s: float = 120.0
@@ -127,8 +131,11 @@ class StreamBatcher:
         self.pos = [0] * batch
 
     def _new(self, i: int) -> None:
-        m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
-        s = synthesize(m, self.rng, self.augment)
+        while True:   # a sped-up short clip can end up shorter than a window: draw again
+            m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
+            s = synthesize(m, self.rng, self.augment)
+            if s.num_frames >= self.window:
+                break
         self.samples[i] = s
         span = s.num_frames - self.window
         self.pos[i] = 0 if (span <= 0 or self.rng.random() < 0.5) else int(self.rng.integers(0, span + 1))
@@ -192,7 +199,8 @@ def validation_set(motions, cfg: TrainConfig) -> list:
 def compute_losses(net_out, batch, cfg: TrainConfig) -> dict:
     rot, vel, logits = net_out
     tgt = batch["local_rot"]
-    l_rot = ((rot - tgt) ** 2).sum((-1, -2)).mean()
+    sq = ((rot - tgt) ** 2).sum((-1, -2))
+    l_rot = torch.sqrt(sq + 1e-6).mean() if cfg.rot_loss == "chordal" else sq.mean()
     off = batch["offsets"][:, None]                                   # (B,1,24,3)
     _, p_pred = forward_kinematics_torch(rot, off, sk.PARENTS)
     _, p_true = forward_kinematics_torch(tgt, off, sk.PARENTS)
@@ -357,6 +365,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         rng.bit_generator.state = ck["numpy_rng"]
         torch.set_rng_state(ck["torch_rng"])
         print(f"train: resumed at step {step} of {total}")
+    if cfg.dropout is not None:
+        net.set_dropout(cfg.dropout)
     batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng)
     val = validation_set(val_motions or [], cfg) if val_motions else []
     steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
@@ -457,7 +467,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
 def main(args) -> int:
     cfg = TrainConfig()
     for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
-              "max_clips", "resume", "smoke", "init_from"):
+              "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -492,6 +502,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--window", type=int, default=None, help="frames per step (default 120)")
     parser.add_argument("--lr", type=float, default=None)
     parser.add_argument("--seed", type=int, default=None)
+    parser.add_argument("--dropout", type=float, default=None, help="dropout in training (default 0.1)")
+    parser.add_argument("--rot-loss", dest="rot_loss", default=None, choices=["chordal", "squared"],
+                        help="rotation loss (default chordal)")
     parser.add_argument("--max-clips", dest="max_clips", type=int, default=None)
     parser.add_argument("--bvh", default=None, help="train on a BVH folder instead of the CMU split")
     parser.add_argument("--val-bvh", dest="val_bvh", default=None)

@@ -136,3 +136,23 @@ def test_torch_fk_matches_skeleton_fk():
     gt, pt = forward_kinematics_torch(torch.from_numpy(m.local_rot), torch.from_numpy(m.offsets), sk.PARENTS)
     assert np.allclose(gt.numpy(), g, atol=1e-5)
     assert np.allclose(pt.numpy(), p - p[:, :1], atol=1e-5)
+
+
+def test_dropout_acts_in_training_only_and_can_change_on_a_warm_start():
+    net = _trained_like()
+    o, a = _inputs(seconds=0.5)
+    with torch.no_grad():
+        ref = net(o, a)[0]
+        net.set_dropout(0.3)
+        assert net.config.dropout == 0.3 and net.lstm.dropout == 0.3
+        assert SMALL.dropout == 0.0          # the shared size preset is not edited
+        assert torch.equal(net(o, a)[0], ref)                 # eval: dropout is off
+        net.train()
+        d1, d2 = net(o, a)[0], net(o, a)[0]
+        net.eval()
+    assert not torch.allclose(d1, d2) and not torch.allclose(d1, ref)
+    # same weights (dropout has none): state dicts load across dropout settings
+    other = PoseNet(SMALL)
+    other.load_state_dict(net.state_dict())
+    with torch.no_grad():
+        assert torch.equal(other.eval()(o, a)[0], ref)

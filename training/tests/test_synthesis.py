@@ -65,7 +65,7 @@ def test_sensor_placement_is_on_the_stated_sides():
 
 def test_augmentation_is_seeded_and_bounded():
     m = procedural.make_motion("walk", seconds=3.0, seed=3)
-    unmirrored = sy.Augmentation(mirror=0.0)
+    unmirrored = sy.Augmentation(mirror=0.0, speed=(1.0, 1.0))
     a = sy.synthesize(m, np.random.default_rng(7), unmirrored)
     b = sy.synthesize(m, np.random.default_rng(7), unmirrored)
     c = sy.synthesize(m, np.random.default_rng(8), unmirrored)
@@ -74,7 +74,7 @@ def test_augmentation_is_seeded_and_bounded():
     scale = a.offsets[4, 1] / m.offsets[4, 1]
     assert 0.9 <= scale <= 1.1
     clean = sy.synthesize(m)
-    nohead = sy.synthesize(m, np.random.default_rng(7), sy.Augmentation(heading=False, mirror=0.0))
+    nohead = sy.synthesize(m, np.random.default_rng(7), sy.Augmentation(heading=False, mirror=0.0, speed=(1.0, 1.0)))
     # orientation errors: a few degrees (mounting + drift + noise), never more than ~15 deg
     # (drop-outs hold an older sample, so compare the median)
     ang = np.degrees(sk.angle_between_rots(nohead.imu_orientation, clean.imu_orientation))
@@ -86,7 +86,8 @@ def test_augmentation_is_seeded_and_bounded():
 def test_heading_augmentation_is_a_pure_yaw():
     m = procedural.make_motion("turn", seconds=3.0, seed=1)
     aug = sy.Augmentation(scale=(1.0, 1.0), mounting_deg=0, heading_drift_deg=0, orientation_noise_deg=0,
-                          acc_noise=0, acc_bias=0, drop_rate=0, mirror=0.0)
+                          acc_noise=0, acc_bias=0, drop_rate=0, mirror=0.0,
+                          speed=(1.0, 1.0))
     a = sy.synthesize(m, np.random.default_rng(2), aug)
     c = sy.synthesize(m)
     # same accelerations up to one rotation about Y: norms and vertical components match
@@ -127,7 +128,7 @@ def test_raw_angular_rate_of_a_yaw_spin():
 
 
 MIRROR_ONLY = dict(scale=(1.0, 1.0), heading=False, mounting_deg=0, heading_drift_deg=0,
-                   orientation_noise_deg=0, acc_noise=0, acc_bias=0, drop_rate=0)
+                   orientation_noise_deg=0, acc_noise=0, acc_bias=0, drop_rate=0, speed=(1.0, 1.0))
 
 
 def test_mirrored_motion_is_the_reflection_with_sides_swapped():
@@ -157,3 +158,37 @@ def test_mirror_augmentation_swaps_the_sensors_of_both_sides():
     assert np.allclose(mirrored.imu_orientation, reflect @ plain.imu_orientation[:, swap] @ reflect, atol=1e-5)
     assert np.array_equal(mirrored.foot_contact, plain.foot_contact[:, ::-1])
     assert np.allclose(never.imu_acceleration, plain.imu_acceleration, atol=1e-5)
+
+
+SPEED_ONLY = dict(MIRROR_ONLY, mirror=0.0)
+
+
+def test_speed_augmentation_replays_the_motion_at_another_tempo():
+    m = procedural.make_motion("walk", seconds=4.0, seed=2)
+    clean = sy.synthesize(m)
+    fast = sy.synthesize(m, np.random.default_rng(0), sy.Augmentation(**SPEED_ONLY | {"speed": (2.0, 2.0)}))
+    slow = sy.synthesize(m, np.random.default_rng(0), sy.Augmentation(**SPEED_ONLY | {"speed": (0.5, 0.5)}))
+    T = m.num_frames
+    assert fast.num_frames == (T - 1) // 2 + 1 and slow.num_frames == 2 * (T - 1) + 1
+    # twice the tempo: frame n is the original frame 2n, and the root moves twice as fast
+    assert np.allclose(fast.local_rot, clean.local_rot[::2], atol=1e-5)
+    assert np.allclose(fast.root_pos, clean.root_pos[::2], atol=1e-5)
+    inner = slice(2, -2)
+    assert np.allclose(fast.root_velocity[inner], 2.0 * clean.root_velocity[::2][inner], atol=0.05)
+    # half the tempo: the original frames come back on the even frames, slerp in between
+    assert np.allclose(slow.local_rot[::2], clean.local_rot, atol=1e-5)
+    mid = sk.angle_between_rots(slow.local_rot[1::2], clean.local_rot[:-1])
+    step = sk.angle_between_rots(clean.local_rot[1:], clean.local_rot[:-1])
+    assert np.allclose(mid, step / 2, atol=1e-4)
+    # accelerations follow the tempo (about 4x for 2x speed); contacts stay a walk's
+    ratio = np.abs(fast.imu_acceleration).mean() / np.abs(clean.imu_acceleration).mean()
+    assert 2.5 < ratio < 5.0
+    assert 0.2 < fast.foot_contact.mean() < 0.9
+
+
+def test_evaluation_inputs_keep_the_clip_timing():
+    from training.evaluate import eval_augmentation
+    m = procedural.make_motion("squat", seconds=3.0, seed=4)
+    s = sy.synthesize(m, np.random.default_rng(1), eval_augmentation())
+    assert s.num_frames == m.num_frames
+    assert np.allclose(s.local_rot, m.local_rot, atol=1e-6)

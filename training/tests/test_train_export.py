@@ -1,5 +1,7 @@
 """Training loop smoke test (one epoch on procedural data) and the ONNX export contract."""
 import json
+import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -40,7 +42,7 @@ def test_one_epoch_smoke_training_and_resume(tmp_path):
     hist = json.loads((tmp_path / "res" / "train_log.json").read_text())["history"]
     assert hist["val"][-1]["val_loss"] < hist["val"][0]["val_loss"]
     net, _ = export.load_checkpoint(tmp_path / "ck" / "best.pt")
-    assert net.config == tr.SIZES["tiny"]
+    assert replace(net.config, dropout=0.0) == tr.SIZES["tiny"] and net.config.dropout == cfg.dropout
 
 
 def test_weights_only_checkpoint_warm_starts_a_new_run(tmp_path):
@@ -51,7 +53,7 @@ def test_weights_only_checkpoint_warm_starts_a_new_run(tmp_path):
     tr.train(cfg, train_m, val_m)
     tr.save_weights(tmp_path / "ck" / "last.pt", tmp_path / "weights.pt")
     small = torch.load(str(tmp_path / "weights.pt"))
-    assert "optimizer" not in small and small["config"] == tr.SIZES["tiny"].to_dict()
+    assert "optimizer" not in small and small["config"] == replace(tr.SIZES["tiny"], dropout=cfg.dropout).to_dict()
     # the warm start begins exactly at those weights (a fresh run would start elsewhere)
     net = tr.load_weights(tmp_path / "weights.pt")
     for k, v in small["model"].items():
@@ -78,12 +80,30 @@ def test_stream_batcher_carries_state_and_resets_on_new_clips():
         assert (not reset2[i] and b.pos[i] == pos[i] + 30) or reset2[i]
 
 
+def test_rotation_losses_chordal_and_squared():
+    T = 5
+    tgt = torch.eye(3).expand(1, T, 24, 3, 3).clone()
+    pred = tgt.clone()
+    theta = math.radians(90.0)
+    c, s = math.cos(theta), math.sin(theta)
+    pred[:, :, 5] = torch.tensor([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])   # one joint 90 deg off
+    batch = {"local_rot": tgt, "offsets": torch.from_numpy(sk.DEFAULT_OFFSETS[None].astype(np.float32)),
+             "root_velocity": torch.zeros(1, T, 3), "foot_contact": torch.ones(1, T, 2)}
+    out = (pred, torch.zeros(1, T, 3), torch.full((1, T, 2), 10.0))
+    chordal = tr.compute_losses(out, batch, tr.TrainConfig(rot_loss="chordal"))["rot"]
+    squared = tr.compute_losses(out, batch, tr.TrainConfig(rot_loss="squared"))["rot"]
+    # Frobenius distance of a rotation by theta: 2 sqrt(2) sin(theta / 2) = 2 at 90 deg
+    assert abs(float(chordal) - 2.0 / 24) < 2e-3
+    assert abs(float(squared) - 4.0 / 24) < 1e-4
+
+
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory):
     d = tmp_path_factory.mktemp("onnx")
     net = export.untrained_model(seed=0)
     with torch.no_grad():       # make the outputs depend visibly on the input
         net.head[-1].weight.normal_(0, 0.05)
+    net.set_dropout(0.2)        # as trained: the export must leave no dropout in the graph
     info = export.export(net, d, model_name="test", check=False)
     return net, d, info
 
@@ -119,6 +139,8 @@ def test_export_follows_the_contract(exported):
         assert dims(ins["state_in_h"]) == [L, "B", H] and dims(outs["state_out_c"]) == [L, "B", H]
         assert dims(outs["joint_rotations"]) == ["B", "T", 24, 3, 3]
         assert dims(outs["root_velocity"]) == ["B", "T", 3] and dims(outs["foot_contact"]) == ["B", "T", 2]
+        assert not any(n.op_type in ("Dropout", "RandomUniformLike", "RandomUniform", "Bernoulli")
+                       for n in m.graph.node)
         types = {i.data_type for i in m.graph.initializer if i.dims and np.prod(i.dims) > 16}
         assert types == ({onnx.TensorProto.FLOAT16} if prec == "fp16" else {onnx.TensorProto.FLOAT})
     assert info["fp32_bytes"] <= 16 * 2 ** 20
