@@ -31,11 +31,28 @@ from dataclasses import dataclass, asdict, replace
 import torch
 import torch.nn as nn
 
+from .skeleton import PARENTS, SENSOR_JOINTS
+
 NUM_SENSORS = 6
 NUM_JOINTS = 24
 ACC_SCALE = 30.0            # m/s^2 -> network units (TransPose uses the same divisor)
 FEATURE_SIZE = 6 * 9 + 6 * 3 + 5 * 9 + 5 * 3   # 132
 OUTPUT_SIZE = NUM_JOINTS * 6 + 3 + 2           # 149
+
+
+
+
+def _ancestors(joints):
+    out = set()
+    for j in joints:
+        p = PARENTS[j]
+        while p > 0:
+            out.add(p)
+            p = PARENTS[p]
+    return out
+
+
+_ANCESTORS_OF_SENSOR_BONES = _ancestors([j for j in SENSOR_JOINTS if j != 0])
 
 
 @dataclass
@@ -45,6 +62,7 @@ class ModelConfig:
     layers: int = 2           # LSTM layers L
     head: int = 256           # output MLP width
     dropout: float = 0.0      # training only: after the frame MLP, between and after LSTM layers
+    anchored: bool = False    # sensor bones' local rotations are residuals on the measured ones
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -140,6 +158,19 @@ class PoseNet(nn.Module):
         self.config.dropout = float(p)
         self.lstm.dropout = float(p) if self.config.layers > 1 else 0.0
 
+    def enable_anchoring(self) -> None:
+        """Switches a non-anchored network to anchored outputs (a warm start): the output rows of
+        the sensor bones are zeroed, so it starts from the measured orientations of those bones."""
+        if self.config.anchored:
+            return
+        self.config.anchored = True
+        last = self.head[-1]
+        with torch.no_grad():
+            for j in SENSOR_JOINTS:
+                if j != 0:
+                    last.weight[j * 6:(j + 1) * 6].zero_()
+                    last.bias[j * 6:(j + 1) * 6].zero_()
+
     @property
     def state_layers(self) -> int:
         return self.config.layers
@@ -153,8 +184,9 @@ class PoseNet(nn.Module):
         z = torch.zeros(shape, device=device)
         return z, z.clone()
 
-    def features(self, ori: torch.Tensor, acc: torch.Tensor) -> tuple:
-        """ori (B,T,6,3,3), acc (B,T,6,3) -> (features (B,T,132), Ry (B,T,3,3), pelvis in heading frame)."""
+    def features(self, ori: torch.Tensor, acc: torch.Tensor, with_heading_frame: bool = False) -> tuple:
+        """ori (B,T,6,3,3), acc (B,T,6,3) -> (features (B,T,132), Ry (B,T,3,3), pelvis in heading
+        frame[, the six orientations in the heading frame (B,T,6,3,3)])."""
         r0 = ori[:, :, 0]
         ry = heading_rotation(r0)
         ryt = ry.transpose(-1, -2).unsqueeze(2)
@@ -165,12 +197,32 @@ class PoseNet(nn.Module):
         arel = (r0t @ (acc[:, :, 1:] - acc[:, :, 0:1]).unsqueeze(-1)).squeeze(-1)
         feat = torch.cat([rg.flatten(2), ag.flatten(2) / ACC_SCALE,
                           rrel.flatten(2), arel.flatten(2) / ACC_SCALE], dim=-1)
+        if with_heading_frame:
+            return feat, ry, rg[:, :, 0], rg
         return feat, ry, rg[:, :, 0]
+
+    def _anchor_sensor_bones(self, rot, rot6, rg):
+        """Re-predicts the local rotation of each non-pelvis sensor bone as a residual on the one
+        its sensor measures: parent_global^T * sensor_orientation, the parent's global rotation
+        from forward kinematics of the predicted ancestors (heading frame). A network with a zero
+        residual reproduces the measured bone orientation exactly; training learns how far to
+        trust it (calibration error) against the rest of the body."""
+        glob = {0: rot[:, :, 0]}
+        for j in range(1, NUM_JOINTS):
+            if j in _ANCESTORS_OF_SENSOR_BONES:
+                glob[j] = glob[PARENTS[j]] @ rot[:, :, j]
+        cols = [rot[:, :, j] for j in range(NUM_JOINTS)]
+        for s, j in enumerate(SENSOR_JOINTS):
+            if j == 0:
+                continue
+            measured = glob[PARENTS[j]].transpose(-1, -2) @ rg[:, :, s]
+            cols[j] = rot6d_to_matrix(rot6[:, :, j] + matrix_to_rot6d(measured))
+        return torch.stack(cols, dim=2)
 
     def forward_raw(self, ori, acc, state=None):
         """Returns (joint_rotations, root_velocity, contact_logits, (h, c))."""
         b, t = ori.shape[0], ori.shape[1]
-        feat, ry, pelvis_h = self.features(ori, acc)
+        feat, ry, pelvis_h, rg = self.features(ori, acc, with_heading_frame=True)
         p = self.config.dropout if self.training else 0.0
         x = self.embed(feat)
         if p > 0:
@@ -185,6 +237,8 @@ class PoseNet(nn.Module):
         base0 = matrix_to_rot6d(pelvis_h).unsqueeze(2)                  # (B,T,1,6)
         base = torch.cat([base0, self.identity6d.expand(b, t, NUM_JOINTS - 1, 6)], dim=2)
         rot = rot6d_to_matrix(rot6 + base)
+        if self.config.anchored:
+            rot = self._anchor_sensor_bones(rot, rot6, rg)
         root_global = ry @ rot[:, :, 0]
         rot = torch.cat([root_global.unsqueeze(2), rot[:, :, 1:]], dim=2)
         vel_h = out[..., NUM_JOINTS * 6:NUM_JOINTS * 6 + 3]

@@ -31,7 +31,7 @@ import json
 import math
 import os
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -69,6 +69,7 @@ class TrainConfig:
     rot_loss: str = "chordal"         # "chordal": Frobenius distance per joint (~ angle, like the
                                       # metric); "squared": its square (punishes outliers more)
     dropout: float | None = 0.1       # PoseNet dropout in training (None: the checkpoint's own)
+    anchored: bool = True             # sensor bones as residuals on their measured orientations
     drift_frames: int = 60
     eval_every_s: float = 180.0
     ckpt_every_s: float = 120.0
@@ -342,7 +343,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     rng = np.random.default_rng(cfg.seed)
     if motions is None:
         motions, val_motions = load_data(cfg)
-    model_cfg = SIZES[cfg.size]
+    model_cfg = replace(SIZES[cfg.size], anchored=cfg.anchored)
     net = PoseNet(model_cfg).to(device)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     ckpt_dir, results_dir = Path(cfg.ckpt_dir), Path(cfg.results_dir)
@@ -367,6 +368,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         print(f"train: resumed at step {step} of {total}")
     if cfg.dropout is not None:
         net.set_dropout(cfg.dropout)
+    if cfg.anchored:
+        net.enable_anchoring()
     batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng)
     val = validation_set(val_motions or [], cfg) if val_motions else []
     steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
@@ -471,6 +474,8 @@ def main(args) -> int:
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
+    if getattr(args, "no_anchor", False):
+        cfg.anchored = False
     if getattr(args, "bvh", None):
         cfg.train_source = args.bvh
         cfg.val_source = getattr(args, "val_bvh", None) or args.bvh
@@ -503,6 +508,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--lr", type=float, default=None)
     parser.add_argument("--seed", type=int, default=None)
     parser.add_argument("--dropout", type=float, default=None, help="dropout in training (default 0.1)")
+    parser.add_argument("--no-anchor", dest="no_anchor", action="store_true",
+                        help="predict the sensor bones like every other joint (runs 1-2)")
     parser.add_argument("--rot-loss", dest="rot_loss", default=None, choices=["chordal", "squared"],
                         help="rotation loss (default chordal)")
     parser.add_argument("--max-clips", dest="max_clips", type=int, default=None)

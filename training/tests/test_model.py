@@ -156,3 +156,43 @@ def test_dropout_acts_in_training_only_and_can_change_on_a_warm_start():
     other.load_state_dict(net.state_dict())
     with torch.no_grad():
         assert torch.equal(other.eval()(o, a)[0], ref)
+
+
+def test_anchored_sensor_bones_start_at_their_measured_orientations():
+    net = _trained_like()
+    net.enable_anchoring()
+    assert net.config.anchored and not SMALL.anchored
+    m = procedural.make_motion("walk", seconds=1.0, seed=3)
+    s = sy.synthesize(m, np.random.default_rng(0), sy.Augmentation(mirror=0.0, speed=(1.0, 1.0)))
+    o, a = torch.from_numpy(s.imu_orientation[None]), torch.from_numpy(s.imu_acceleration[None])
+    with torch.no_grad():
+        rot = net(o, a)[0][0].double().numpy()
+    g, _ = sk.forward_kinematics(rot, np.zeros((rot.shape[0], 3)), sk.DEFAULT_OFFSETS)
+    for si, j in enumerate(sk.SENSOR_JOINTS[1:], start=1):
+        err = np.degrees(sk.angle_between_rots(g[:, j], s.imu_orientation[:, si].astype(np.float64)))
+        assert err.max() < 1e-3, (j, err.max())
+    # the residual is live: other output weights move the sensor bones off the measurement
+    with torch.no_grad():
+        net.head[-1].bias[15 * 6:16 * 6].add_(0.3)
+        moved = net(o, a)[0][0].double().numpy()
+    g2, _ = sk.forward_kinematics(moved, np.zeros((rot.shape[0], 3)), sk.DEFAULT_OFFSETS)
+    assert np.degrees(sk.angle_between_rots(g2[:, 15], g[:, 15])).min() > 1.0
+
+
+def test_anchored_network_streams_and_stays_heading_equivariant():
+    net = _trained_like()
+    net.enable_anchoring()
+    with torch.no_grad():
+        net.head[-1].weight.normal_(0, 0.3)
+    o, a = _inputs(seconds=0.5)
+    with torch.no_grad():
+        whole = net(o, a)
+        state, parts = None, []
+        for t in range(o.shape[1]):
+            r, _, _, state = net(o[:, t:t + 1], a[:, t:t + 1], state)
+            parts.append(r)
+        assert torch.allclose(torch.cat(parts, dim=1), whole[0], atol=1e-5)
+        yaw = torch.from_numpy(sk.rot_axis("y", 0.8).astype(np.float32))
+        turned = net(yaw @ o, (yaw @ a.unsqueeze(-1)).squeeze(-1))[0]
+    assert torch.allclose(turned[:, :, 1:], whole[0][:, :, 1:], atol=1e-4)
+    assert torch.allclose(turned[:, :, 0], yaw @ whole[0][:, :, 0], atol=1e-4)

@@ -42,7 +42,8 @@ def test_one_epoch_smoke_training_and_resume(tmp_path):
     hist = json.loads((tmp_path / "res" / "train_log.json").read_text())["history"]
     assert hist["val"][-1]["val_loss"] < hist["val"][0]["val_loss"]
     net, _ = export.load_checkpoint(tmp_path / "ck" / "best.pt")
-    assert replace(net.config, dropout=0.0) == tr.SIZES["tiny"] and net.config.dropout == cfg.dropout
+    assert replace(net.config, dropout=0.0, anchored=False) == tr.SIZES["tiny"]
+    assert net.config.dropout == cfg.dropout and net.config.anchored == cfg.anchored
 
 
 def test_weights_only_checkpoint_warm_starts_a_new_run(tmp_path):
@@ -53,7 +54,8 @@ def test_weights_only_checkpoint_warm_starts_a_new_run(tmp_path):
     tr.train(cfg, train_m, val_m)
     tr.save_weights(tmp_path / "ck" / "last.pt", tmp_path / "weights.pt")
     small = torch.load(str(tmp_path / "weights.pt"))
-    assert "optimizer" not in small and small["config"] == replace(tr.SIZES["tiny"], dropout=cfg.dropout).to_dict()
+    assert "optimizer" not in small and small["config"] == replace(tr.SIZES["tiny"], dropout=cfg.dropout,
+                                                                anchored=True).to_dict()
     # the warm start begins exactly at those weights (a fresh run would start elsewhere)
     net = tr.load_weights(tmp_path / "weights.pt")
     for k, v in small["model"].items():
@@ -101,6 +103,7 @@ def test_rotation_losses_chordal_and_squared():
 def exported(tmp_path_factory):
     d = tmp_path_factory.mktemp("onnx")
     net = export.untrained_model(seed=0)
+    net.enable_anchoring()      # as trained since run 5: the anchored output path is exported
     with torch.no_grad():       # make the outputs depend visibly on the input
         net.head[-1].weight.normal_(0, 0.05)
     net.set_dropout(0.2)        # as trained: the export must leave no dropout in the graph
