@@ -248,6 +248,17 @@ void report_timing(mocap_solver *solver, const char *what)
 
 }  // namespace
 
+// Most solver tests run on the shipped model: skipped without ONNX Runtime, opened once per test.
+class SolverOnShippedModel : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        REQUIRE_ORT();
+        ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    }
+    Model model;
+};
+
 TEST(Solver, MissingModelIsNotFoundNamingTheFile)
 {
     REQUIRE_ORT();
@@ -259,11 +270,8 @@ TEST(Solver, MissingModelIsNotFoundNamingTheFile)
         << mocap_last_error();
 }
 
-TEST(Solver, ModelInfoFollowsTheContract)
+TEST_F(SolverOnShippedModel, ModelInfoFollowsTheContract)
 {
-    REQUIRE_ORT();
-    Model model;
-    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
     mocap_model_info info;
     ASSERT_EQ(mocap_model_get_info(model.m, &info), MOCAP_OK);
     EXPECT_EQ(info.contract_version, 1);
@@ -329,11 +337,8 @@ TEST(Solver, WrongModelIsRefusedByNameAndTheProcessStaysUsable)
     EXPECT_GT(poses[0].size(), 100u);
 }
 
-TEST(Solver, SessionRateDifferentFromTheModelRateIsRefusedAtAddCharacter)
+TEST_F(SolverOnShippedModel, SessionRateDifferentFromTheModelRateIsRefusedAtAddCharacter)
 {
-    REQUIRE_ORT();
-    Model model;
-    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
     std::string cap = test_temp_path("rate.cap");
     synth_config cfg = short_capture(32, 1.0, "walk", cap);
     Sessions sessions;
@@ -352,11 +357,8 @@ TEST(Solver, SessionRateDifferentFromTheModelRateIsRefusedAtAddCharacter)
     EXPECT_EQ(mocap_solver_poll_latest(solver.s, 0, &pose), MOCAP_ERR_INVALID_ARGUMENT);
 }
 
-TEST(Solver, ReplaySolvedEndToEnd)
+TEST_F(SolverOnShippedModel, ReplaySolvedEndToEnd)
 {
-    REQUIRE_ORT();
-    Model model;
-    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
     mocap_model_info info;
     mocap_model_get_info(model.m, &info);
     std::string cap = test_temp_path("walk.cap");
@@ -442,11 +444,8 @@ double mean_jerk(const std::vector<mocap_pose> &poses)
     return n ? sum / n : 0.0;
 }
 
-TEST(Solver, SmoothingRemovesJitterAndCanBeTurnedOff)
+TEST_F(SolverOnShippedModel, SmoothingRemovesJitterAndCanBeTurnedOff)
 {
-    REQUIRE_ORT();
-    Model model;
-    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
     std::string cap = test_temp_path("smooth.cap");
     synth_config cfg = short_capture(21, 6.0, "mixed", cap);
     mocap_solver_config off;
@@ -484,11 +483,8 @@ TEST(Solver, SmoothingRemovesJitterAndCanBeTurnedOff)
 }
 
 // Three characters from three replays are solved in batched inference calls.
-TEST(Solver, ThreeReplaysAreBatchedInOneCallPerTick)
+TEST_F(SolverOnShippedModel, ThreeReplaysAreBatchedInOneCallPerTick)
 {
-    REQUIRE_ORT();
-    Model model;
-    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
     mocap_model_info info;
     mocap_model_get_info(model.m, &info);
     Sessions sessions;
@@ -531,11 +527,8 @@ TEST(Solver, ThreeReplaysAreBatchedInOneCallPerTick)
 
 // A live character on a pseudo-terminal is unplugged; two paced replays keep producing poses at
 // the frame rate, without waiting for it.
-TEST(Solver, UnpluggedCharacterDoesNotStallTheOthers)
+TEST_F(SolverOnShippedModel, UnpluggedCharacterDoesNotStallTheOthers)
 {
-    REQUIRE_ORT();
-    Model model;
-    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
     mocap_solver_config sc;
     mocap_solver_config_defaults(&sc);
     sc.require_calibration = 0;  // live + paced replays: no time for calibration preludes here
@@ -729,11 +722,8 @@ TEST(Solver, NonFiniteInputFramesAreNotFed)
     EXPECT_EQ(0, memcmp(ref[2].foot_contact, poses[4].foot_contact, sizeof ref[2].foot_contact));
 }
 
-TEST(Solver, ConfigIsValidated)
+TEST_F(SolverOnShippedModel, ConfigIsValidated)
 {
-    REQUIRE_ORT();
-    Model model;
-    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
     mocap_solver_config c;
     mocap_solver_config_defaults(&c);
     EXPECT_EQ(c.struct_size, sizeof c);
