@@ -40,8 +40,6 @@ FEATURE_SIZE = 6 * 9 + 6 * 3 + 5 * 9 + 5 * 3   # 132
 OUTPUT_SIZE = NUM_JOINTS * 6 + 3 + 2           # 149
 
 
-
-
 def _ancestors(joints):
     out = set()
     for j in joints:
@@ -184,9 +182,9 @@ class PoseNet(nn.Module):
         z = torch.zeros(shape, device=device)
         return z, z.clone()
 
-    def features(self, ori: torch.Tensor, acc: torch.Tensor, with_heading_frame: bool = False) -> tuple:
-        """ori (B,T,6,3,3), acc (B,T,6,3) -> (features (B,T,132), Ry (B,T,3,3), pelvis in heading
-        frame[, the six orientations in the heading frame (B,T,6,3,3)])."""
+    def features(self, ori: torch.Tensor, acc: torch.Tensor) -> tuple:
+        """ori (B,T,6,3,3), acc (B,T,6,3) -> (features (B,T,132), Ry (B,T,3,3), the six
+        orientations in the heading frame (B,T,6,3,3); sensor 0 is the pelvis)."""
         r0 = ori[:, :, 0]
         ry = heading_rotation(r0)
         ryt = ry.transpose(-1, -2).unsqueeze(2)
@@ -197,9 +195,7 @@ class PoseNet(nn.Module):
         arel = (r0t @ (acc[:, :, 1:] - acc[:, :, 0:1]).unsqueeze(-1)).squeeze(-1)
         feat = torch.cat([rg.flatten(2), ag.flatten(2) / ACC_SCALE,
                           rrel.flatten(2), arel.flatten(2) / ACC_SCALE], dim=-1)
-        if with_heading_frame:
-            return feat, ry, rg[:, :, 0], rg
-        return feat, ry, rg[:, :, 0]
+        return feat, ry, rg
 
     def _anchor_sensor_bones(self, rot, rot6, rg):
         """Re-predicts the local rotation of each non-pelvis sensor bone as a residual on the one
@@ -222,7 +218,7 @@ class PoseNet(nn.Module):
     def forward_raw(self, ori, acc, state=None):
         """Returns (joint_rotations, root_velocity, contact_logits, (h, c))."""
         b, t = ori.shape[0], ori.shape[1]
-        feat, ry, pelvis_h, rg = self.features(ori, acc, with_heading_frame=True)
+        feat, ry, rg = self.features(ori, acc)
         p = self.config.dropout if self.training else 0.0
         x = self.embed(feat)
         if p > 0:
@@ -234,7 +230,7 @@ class PoseNet(nn.Module):
             y = torch.nn.functional.dropout(y, p, True)
         out = self.head(y)
         rot6 = out[..., :NUM_JOINTS * 6].reshape(b, t, NUM_JOINTS, 6)
-        base0 = matrix_to_rot6d(pelvis_h).unsqueeze(2)                  # (B,T,1,6)
+        base0 = matrix_to_rot6d(rg[:, :, 0]).unsqueeze(2)               # (B,T,1,6)
         base = torch.cat([base0, self.identity6d.expand(b, t, NUM_JOINTS - 1, 6)], dim=2)
         rot = rot6d_to_matrix(rot6 + base)
         if self.config.anchored:

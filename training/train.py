@@ -16,7 +16,8 @@ as at the start of every engine session) and for long runs with a warm state; a 
 
 Losses per frame: rotation (Frobenius distance of the 24 matrices, local, joint 0 global: the
 chordal distance 2 sqrt(2) sin(angle / 2), which grows like the angle the metric averages; the
-squared distance of earlier runs pulls ambiguous joints to the mean of their possible poses), joint positions (mean distance of root-relative joints after forward kinematics of the
+squared distance of earlier runs pulls ambiguous joints to the mean of their possible poses),
+joint positions (mean distance of root-relative joints after forward kinematics of the
 predicted rotations on the sample's own skeleton), root velocity (MSE, m/s), root drift
 (displacement error accumulated over 1 s inside the window), foot contact (BCE on logits).
 

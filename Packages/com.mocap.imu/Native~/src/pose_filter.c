@@ -1,11 +1,8 @@
 #include "pose_filter.h"
 
-#include <math.h>
 #include <string.h>
 
 #include "mocap_math.h"
-
-#define PI 3.14159265358979323846
 
 void pose_filter_reset(pose_filter_state *s)
 {
@@ -14,7 +11,7 @@ void pose_filter_reset(pose_filter_state *s)
 
 static double smoothing_factor(double cutoff_hz, double dt)
 {
-    double r = 2.0 * PI * cutoff_hz * dt;
+    double r = 2.0 * MOCAP_PI * cutoff_hz * dt;
     return r / (r + 1.0);
 }
 
@@ -33,16 +30,11 @@ void pose_filter_step(pose_filter_state *s, const pose_filter_params *p, double 
     const double a_speed = smoothing_factor(p->speed_cutoff_hz > 0.0 ? p->speed_cutoff_hz : 1.0, p->dt);
     for (int j = 0; j < n; ++j) {
         /* Angle between the new rotation and the last filtered one: the raw speed estimate. */
-        double dot = s->q[j][0] * q[j][0] + s->q[j][1] * q[j][1] + s->q[j][2] * q[j][2] +
-                     s->q[j][3] * q[j][3];
-        double c = fabs(dot);
-        if (c > 1.0) c = 1.0;
-        double raw_speed = 2.0 * acos(c) / p->dt;
+        double raw_speed = quat_angle_deg(s->q[j], q[j]) * MOCAP_DEG2RAD / p->dt;
         s->speed[j] += a_speed * (raw_speed - s->speed[j]);
         double cutoff = p->min_cutoff_hz + (p->beta > 0.0 ? p->beta : 0.0) * s->speed[j];
         double out[4];
-        quat_slerp(out, s->q[j], q[j], smoothing_factor(cutoff, p->dt));
-        if (quat_normalize(out) != 0) quat_copy(out, q[j]);
+        quat_slerp(out, s->q[j], q[j], smoothing_factor(cutoff, p->dt));   /* unit length */
         quat_copy(s->q[j], out);
         /* Same rotation, but on the caller's hemisphere (q and -q), as unfiltered output is. */
         double same = out[0] * q[j][0] + out[1] * q[j][1] + out[2] * q[j][2] + out[3] * q[j][3];
