@@ -19,7 +19,7 @@ import numpy as np
 import torch
 
 from . import skeleton as sk
-from .model import ExportWrapper, ModelConfig, PoseNet, count_parameters
+from .model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
@@ -219,7 +219,11 @@ def main(args) -> int:
             print(f"export: no checkpoint at {ckpt} (train first, or pass --untrained)")
             return 2
         net, ck = load_checkpoint(ckpt)
-        name = f"mocap-pose lstm{net.state_layers}x{net.state_size} step {ck.get('step', '?')}"
+        name = f"mocap-pose lstm{net.state_layers}x{net.state_size}"
+        if not getattr(args, "no_mirror", False):
+            net = MirrorEnsemble(net).eval()
+            name += " mirror-averaged"
+        name += f" step {ck.get('step', '?')}"
     info = export(net, getattr(args, "out", None) or DEFAULT_OUT, model_name=name,
                   check=not getattr(args, "no_check", False))
     print(json.dumps(info, indent=1))
@@ -231,5 +235,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--untrained", action="store_true", help="export a seeded random-init model")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default=None, help=f"output folder (default {DEFAULT_OUT.relative_to(REPO)})")
+    parser.add_argument("--no-mirror", dest="no_mirror", action="store_true",
+                        help="export the single network instead of the mirror-averaged pair "
+                             "(model.MirrorEnsemble: half the cost per frame, larger errors)")
     parser.add_argument("--no-check", dest="no_check", action="store_true",
                         help="skip the ONNX Runtime vs PyTorch comparison")

@@ -9,7 +9,7 @@ import torch
 from training import evaluate as ev
 from training import ort, procedural
 from training import skeleton as sk
-from training.model import ExportWrapper, ModelConfig, PoseNet
+from training.model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet
 
 
 def test_rotation_angle():
@@ -79,7 +79,8 @@ def test_evaluate_end_to_end(tmp_path):
     motions = [procedural.make_motion(k, 6.0, seed=i) for i, k in enumerate(["walk", "turn"])]
     models = []
     if ort.onnx_runtime_available():
-        _export(net, tmp_path / "tiny_fp32.onnx", cfg.layers, cfg.hidden)
+        # as shipped: the mirror-averaged pair, which evaluate's PyTorch row also runs
+        _export(MirrorEnsemble(net), tmp_path / "tiny_fp32.onnx", cfg.layers, 2 * cfg.hidden)
         models.append(tmp_path / "tiny_fp32.onnx")
     out = tmp_path / "results"
     r = ev.evaluate(motions, models, ckpt, out, seed=1, latency_frames=120, source="procedural")

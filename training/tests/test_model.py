@@ -4,7 +4,8 @@ import pytest
 import torch
 
 from training import procedural, skeleton as sk, synthesis as sy
-from training.model import (ModelConfig, PoseNet, STATE_LAYERS, STATE_SIZE, count_parameters,
+from training.model import (MIRROR_SENSORS, MirrorEnsemble, ModelConfig, PoseNet, STATE_LAYERS,
+                            STATE_SIZE, count_parameters,
                             forward_kinematics_torch, heading_rotation, matrix_to_rot6d, rot6d_to_matrix)
 
 SMALL = ModelConfig(64, 64, 2, 64)
@@ -196,3 +197,71 @@ def test_anchored_network_streams_and_stays_heading_equivariant():
         turned = net(yaw @ o, (yaw @ a.unsqueeze(-1)).squeeze(-1))[0]
     assert torch.allclose(turned[:, :, 1:], whole[0][:, :, 1:], atol=1e-4)
     assert torch.allclose(turned[:, :, 0], yaw @ whole[0][:, :, 0], atol=1e-4)
+
+
+def _mirrored(o, a):
+    m = torch.diag(torch.tensor([-1.0, 1.0, 1.0]))
+    return m, m @ o[:, :, MIRROR_SENSORS] @ m, a[:, :, MIRROR_SENSORS] @ m
+
+
+def test_mirror_ensemble_is_exactly_mirror_equivariant_where_the_single_network_is_not():
+    """The same motion performed mirror-image must give the mirror-image pose, left and right
+    swapped: this fails for a wrong sensor swap, joint swap, reflection or contact order."""
+    net = _trained_like()
+    net.enable_anchoring()
+    with torch.no_grad():
+        net.head[-1].weight.normal_(0, 0.3)
+    ens = MirrorEnsemble(net).eval()
+    o, a = _inputs(seconds=0.5)
+    m, om, am = _mirrored(o, a)
+    with torch.no_grad():
+        r, v, c, _ = ens(o, a)
+        rm, vm, cm, _ = ens(om, am)
+        single, single_m = net(o, a)[0], net(om, am)[0]
+    assert torch.allclose(m @ rm[:, :, sk.MIRROR_JOINTS] @ m, r, atol=1e-5)
+    assert torch.allclose(vm @ m, v, atol=1e-5)
+    assert torch.allclose(cm.flip(-1), c, atol=1e-6)
+    # a random single network is not symmetric: the ensemble's symmetry is its own doing
+    assert (m @ single_m[:, :, sk.MIRROR_JOINTS] @ m - single).abs().max() > 1e-2
+    # and its answer lies between the two branches': valid rotations, not either branch alone
+    eye = torch.eye(3).expand_as(r)
+    assert torch.allclose(r.transpose(-1, -2) @ r, eye, atol=1e-5)
+    assert torch.allclose(torch.linalg.det(r), torch.ones(r.shape[:-2]), atol=1e-5)
+    assert (r - single).abs().max() > 1e-3
+
+
+def test_mirror_ensemble_streams_with_a_doubled_state_and_keeps_the_weights():
+    net = _trained_like()
+    ens = MirrorEnsemble(net).eval()
+    assert (ens.state_layers, ens.state_size) == (net.state_layers, 2 * net.state_size)
+    assert count_parameters(ens) == count_parameters(net)
+    o, a = _inputs(seconds=0.5)
+    with torch.no_grad():
+        whole = ens(o, a)
+        state, parts = None, []
+        for t in range(o.shape[1]):
+            r, v, c, state = ens(o[:, t:t + 1], a[:, t:t + 1], state)
+            parts.append((r, v, c))
+        # the state halves are the two branches' own LSTM states
+        _, _, _, (h_plain, _) = net(o, a)
+        _, om, am = _mirrored(o, a)
+        _, _, _, (h_mirror, _) = net(om, am)
+    assert state[0].shape == (net.state_layers, o.shape[0], 2 * net.state_size)
+    for i in range(3):
+        assert torch.allclose(torch.cat([p[i] for p in parts], dim=1), whole[i], atol=1e-5)
+    assert torch.allclose(whole[3][0][..., :net.state_size], h_plain, atol=1e-5)
+    assert torch.allclose(whole[3][0][..., net.state_size:], h_mirror, atol=1e-5)
+
+
+@pytest.mark.parametrize("yaw", [0.7, -2.5])
+def test_mirror_ensemble_stays_heading_equivariant(yaw):
+    ens = MirrorEnsemble(_trained_like()).eval()
+    o, a = _inputs()
+    ry = _ry(yaw)
+    with torch.no_grad():
+        r1, v1, c1, _ = ens(o, a)
+        r2, v2, c2, _ = ens(ry @ o, (ry @ a.unsqueeze(-1)).squeeze(-1))
+    assert torch.allclose(r2[:, :, 1:], r1[:, :, 1:], atol=1e-4)
+    assert torch.allclose(r2[:, :, 0], ry @ r1[:, :, 0], atol=1e-4)
+    assert torch.allclose(v2, (ry @ v1.unsqueeze(-1)).squeeze(-1), atol=1e-4)
+    assert torch.allclose(c2, c1, atol=1e-4)

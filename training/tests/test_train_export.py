@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from training import export, procedural, skeleton as sk, train as tr
-from training.model import ModelConfig, PoseNet
+from training.model import MirrorEnsemble, ModelConfig, PoseNet
 
 CONTRACT_KEYS = ["mocap.contract_version", "mocap.frame_rate", "mocap.sensor_order", "mocap.joint_names",
                  "mocap.joint_parents", "mocap.rest_offsets", "mocap.state_layers", "mocap.state_size",
@@ -107,8 +107,9 @@ def exported(tmp_path_factory):
     with torch.no_grad():       # make the outputs depend visibly on the input
         net.head[-1].weight.normal_(0, 0.05)
     net.set_dropout(0.2)        # as trained: the export must leave no dropout in the graph
-    info = export.export(net, d, model_name="test", check=False)
-    return net, d, info
+    model = MirrorEnsemble(net).eval()   # as shipped: the mirror-averaged pair
+    info = export.export(model, d, model_name="test", check=False)
+    return model, d, info
 
 
 def test_export_follows_the_contract(exported):
@@ -128,7 +129,7 @@ def test_export_follows_the_contract(exported):
         offs = np.array([float(x) for x in meta["mocap.rest_offsets"].split(",")]).reshape(24, 3)
         assert np.allclose(offs, sk.DEFAULT_OFFSETS, atol=1e-6)
         L, H = int(meta["mocap.state_layers"]), int(meta["mocap.state_size"])
-        assert (L, H) == (net.state_layers, net.state_size)
+        assert (L, H) == (net.state_layers, net.state_size) == (net.net.state_layers, 2 * net.net.state_size)
 
         def dims(vi):
             return [dd.dim_param or dd.dim_value for dd in vi.type.tensor_type.shape.dim]
@@ -164,3 +165,22 @@ def test_onnx_runtime_matches_pytorch_and_streams(exported):
     # the test model is not trivial: outputs move with the input
     ref = export.torch_outputs(net, ori, acc)
     assert np.ptp(ref["root_velocity"]) > 1e-3
+
+
+def test_export_cli_ships_the_mirror_averaged_pair_unless_told_not_to(tmp_path):
+    import argparse
+    import onnx
+    torch.manual_seed(0)
+    cfg = ModelConfig(embed=16, hidden=8, layers=1, head=16)
+    ckpt = tmp_path / "tiny.pt"
+    torch.save({"model": PoseNet(cfg).state_dict(), "config": cfg.to_dict(), "step": 7}, ckpt)
+    parser = argparse.ArgumentParser()
+    export.add_arguments(parser)
+    for extra, size, named in (([], 16, True), (["--no-mirror"], 8, False)):
+        out = tmp_path / ("plain" if extra else "pair")
+        assert export.main(parser.parse_args(["--checkpoint", str(ckpt), "--out", str(out), "--no-check"]
+                                             + extra)) == 0
+        meta = {p.key: p.value for p in onnx.load(str(out / export.FP32_NAME)).metadata_props}
+        assert int(meta["mocap.state_size"]) == size
+        assert ("mirror-averaged" in meta["mocap.model_name"]) == named
+        assert meta["mocap.model_name"].endswith("step 7")

@@ -4,7 +4,8 @@
 1. A small random PoseNet (training/model.py, the "tiny" size of training/train.py, seeded) is
    exported with training/export.py to a temporary .onnx. Its last layer is scaled back up (the
    constructor shrinks it 100x so an untrained model outputs the rest pose) so that every output
-   depends visibly on the inputs and on the recurrent state.
+   depends visibly on the inputs and on the recurrent state. It is exported as it ships: the
+   mirror-averaged pair (model.MirrorEnsemble), so the engine carries the doubled state.
 2. `mocapctl synth` writes a fixture capture (calibration prelude + motion, realistic noise).
 3. tests/solver_dump runs the engine (replay -> calibration -> solver thread -> ONNX Runtime,
    T = 1 per call, state carried) and writes, per pose, the calibrated inputs it fed the model
@@ -60,7 +61,7 @@ def main():
     sys.path.insert(0, str(REPO))
     from training import skeleton as sk
     from training.export import export_fp32
-    from training.model import ModelConfig, PoseNet, forward_kinematics_torch
+    from training.model import MirrorEnsemble, ModelConfig, PoseNet, forward_kinematics_torch
 
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
@@ -69,6 +70,7 @@ def main():
     with torch.no_grad():
         net.head[-1].weight.mul_(300.0)
         net.head[-1].bias.normal_(0.0, 0.3)
+    net = MirrorEnsemble(net).eval()
     model = work / "golden_tiny.onnx"
     export_fp32(net, model, "golden tiny (random, seed 1234)")
 
