@@ -58,19 +58,25 @@ def test_untrained_default_outputs_rest_pose_and_measured_pelvis():
     assert float((rot[:, :, 0] - o[:, :, 0]).abs().max()) < 0.05
 
 
+def _streamed(net, o, a):
+    """One call per frame with the state carried, as the engine runs: the (rotation, velocity,
+    contact) series over the clip and the last state."""
+    state, parts = None, []
+    with torch.no_grad():
+        for t in range(o.shape[1]):
+            r, v, c, state = net(o[:, t:t + 1], a[:, t:t + 1], state)
+            parts.append((r, v, c))
+    return tuple(torch.cat([p[i] for p in parts], dim=1) for i in range(3)), state
+
+
 def test_streaming_equals_whole_clip():
     net = _trained_like()
     o, a = _inputs(seconds=0.5)
     with torch.no_grad():
         whole = net(o, a)
-        state = None
-        parts = []
-        for t in range(o.shape[1]):
-            r, v, c, state = net(o[:, t:t + 1], a[:, t:t + 1], state)
-            parts.append((r, v, c))
+    streamed, state = _streamed(net, o, a)
     for i in range(3):
-        streamed = torch.cat([p[i] for p in parts], dim=1)
-        assert torch.allclose(streamed, whole[i], atol=1e-5)
+        assert torch.allclose(streamed[i], whole[i], atol=1e-5)
     assert torch.allclose(state[0], whole[3][0], atol=1e-5)
 
 
@@ -90,10 +96,11 @@ def _ry(angle):
     return torch.from_numpy(sy._ry(angle).astype(np.float32))
 
 
+@pytest.mark.parametrize("mirror_averaged", [False, True])
 @pytest.mark.parametrize("yaw", [0.7, -2.5, 3.1])
-def test_heading_equivariance(yaw):
+def test_heading_equivariance(yaw, mirror_averaged):
     """Yawing the whole body: local joints unchanged, pelvis and velocity rotate with it."""
-    net = _trained_like()
+    net = MirrorEnsemble(_trained_like()).eval() if mirror_averaged else _trained_like()
     o, a = _inputs()
     ry = _ry(yaw)
     o2 = ry @ o
@@ -186,13 +193,9 @@ def test_anchored_network_streams_and_stays_heading_equivariant():
     with torch.no_grad():
         net.head[-1].weight.normal_(0, 0.3)
     o, a = _inputs(seconds=0.5)
+    assert torch.allclose(_streamed(net, o, a)[0][0], net(o, a)[0].detach(), atol=1e-5)
     with torch.no_grad():
         whole = net(o, a)
-        state, parts = None, []
-        for t in range(o.shape[1]):
-            r, _, _, state = net(o[:, t:t + 1], a[:, t:t + 1], state)
-            parts.append(r)
-        assert torch.allclose(torch.cat(parts, dim=1), whole[0], atol=1e-5)
         yaw = torch.from_numpy(sk.rot_axis("y", 0.8).astype(np.float32))
         turned = net(yaw @ o, (yaw @ a.unsqueeze(-1)).squeeze(-1))[0]
     assert torch.allclose(turned[:, :, 1:], whole[0][:, :, 1:], atol=1e-4)
@@ -236,32 +239,15 @@ def test_mirror_ensemble_streams_with_a_doubled_state_and_keeps_the_weights():
     assert (ens.state_layers, ens.state_size) == (net.state_layers, 2 * net.state_size)
     assert count_parameters(ens) == count_parameters(net)
     o, a = _inputs(seconds=0.5)
+    streamed, state = _streamed(ens, o, a)
     with torch.no_grad():
         whole = ens(o, a)
-        state, parts = None, []
-        for t in range(o.shape[1]):
-            r, v, c, state = ens(o[:, t:t + 1], a[:, t:t + 1], state)
-            parts.append((r, v, c))
         # the state halves are the two branches' own LSTM states
         _, _, _, (h_plain, _) = net(o, a)
         _, om, am = _mirrored(o, a)
         _, _, _, (h_mirror, _) = net(om, am)
     assert state[0].shape == (net.state_layers, o.shape[0], 2 * net.state_size)
     for i in range(3):
-        assert torch.allclose(torch.cat([p[i] for p in parts], dim=1), whole[i], atol=1e-5)
+        assert torch.allclose(streamed[i], whole[i], atol=1e-5)
     assert torch.allclose(whole[3][0][..., :net.state_size], h_plain, atol=1e-5)
     assert torch.allclose(whole[3][0][..., net.state_size:], h_mirror, atol=1e-5)
-
-
-@pytest.mark.parametrize("yaw", [0.7, -2.5])
-def test_mirror_ensemble_stays_heading_equivariant(yaw):
-    ens = MirrorEnsemble(_trained_like()).eval()
-    o, a = _inputs()
-    ry = _ry(yaw)
-    with torch.no_grad():
-        r1, v1, c1, _ = ens(o, a)
-        r2, v2, c2, _ = ens(ry @ o, (ry @ a.unsqueeze(-1)).squeeze(-1))
-    assert torch.allclose(r2[:, :, 1:], r1[:, :, 1:], atol=1e-4)
-    assert torch.allclose(r2[:, :, 0], ry @ r1[:, :, 0], atol=1e-4)
-    assert torch.allclose(v2, (ry @ v1.unsqueeze(-1)).squeeze(-1), atol=1e-4)
-    assert torch.allclose(c2, c1, atol=1e-4)
