@@ -259,7 +259,7 @@ class MirrorEnsemble(nn.Module):
     and contact probabilities averaged). Training uses mirrored clips half the time, so both
     answers are valid estimates with partly independent errors: on the validation subjects the
     average cut the third training run's errors from 9.66 to 9.42 deg and from 6.95 to 6.77 cm.
-    The result is exactly mirror-equivariant; cost per frame doubles, weights do not.
+    The result is exactly mirror-equivariant; a frame costs ~1.4x (the weights are read once).
 
     Same interface as PoseNet. Both branches run as one batch of 2B, so the state stays one
     pair of tensors: [L, B, 2H], the plain branch's H values then the mirrored branch's."""

@@ -116,7 +116,7 @@ namespace Mocap.Imu
         [Tooltip("Output smoothing: cut-off frequency (Hz) for a joint at rest. Lower is smoother; 0 = off (the model's raw output).")]
         [Min(0f)] public float smoothingMinCutoffHz = 1f;
         [Tooltip("How much fast motion bypasses the smoothing (Hz per rad/s of joint speed): higher = less lag on fast moves.")]
-        [Min(0f)] public float smoothingBeta = 4f;
+        [Min(0f)] public float smoothingBeta = 6f;
 
         [Header("Characters (one sensor set each)")]
         public List<MocapCharacterSource> characters = new List<MocapCharacterSource> { new MocapCharacterSource() };

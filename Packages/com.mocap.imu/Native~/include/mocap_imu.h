@@ -384,7 +384,7 @@ typedef struct mocap_solver_config {
     /* Output smoothing, a one-euro filter per joint rotation: the cut-off frequency is
      * smoothing_min_cutoff_hz for a joint at rest and rises by smoothing_beta Hz per rad/s of the
      * joint's speed, so slow motion loses its jitter and fast motion does not lag.
-     * smoothing_min_cutoff_hz = 0 turns it off (the model's raw output). Defaults 1.0 Hz, 4.0. */
+     * smoothing_min_cutoff_hz = 0 turns it off (the model's raw output). Defaults 1.0 Hz, 6.0. */
     float smoothing_min_cutoff_hz;
     float smoothing_beta;
 } mocap_solver_config;

@@ -410,7 +410,7 @@ mocap_status mocap_solver_config_defaults(mocap_solver_config *c)
     c->drift_correction = 1;
     c->require_calibration = 1;
     c->smoothing_min_cutoff_hz = 1.0f;
-    c->smoothing_beta = 4.0f;
+    c->smoothing_beta = 6.0f;
     return MOCAP_OK;
 }
 

@@ -72,7 +72,7 @@ static int usage(void)
             "                 [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]\n"
             "  mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
             "                 [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
-            "                 [--smoothing HZ[,BETA]]   (output filter; default 1,4; 0 = off)\n"
+            "                 [--smoothing HZ[,BETA]]   (output filter; default 1,6; 0 = off)\n"
             "  mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
             "                 [--smoothing HZ[,BETA]]\n"
             "  mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S]\n"

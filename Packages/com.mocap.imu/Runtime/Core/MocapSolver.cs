@@ -10,7 +10,7 @@ namespace Mocap.Imu
     public sealed class SolverConfig
     {
         /// <summary>The engine's defaults (0.5 contact threshold, floor at 0, drift correction on,
-        /// only calibrated frames solved, output smoothing 1 Hz / 4).</summary>
+        /// only calibrated frames solved, output smoothing 1 Hz / 6).</summary>
         public unsafe SolverConfig()
         {
             MocapEngine.EnsureCompatible();

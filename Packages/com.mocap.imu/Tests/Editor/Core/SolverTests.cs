@@ -385,7 +385,7 @@ namespace Mocap.Imu.Tests
         {
             var defaults = new SolverConfig();
             Assert.AreEqual(1f, defaults.SmoothingMinCutoffHz);
-            Assert.AreEqual(4f, defaults.SmoothingBeta);
+            Assert.AreEqual(6f, defaults.SmoothingBeta);
             var raw = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingMinCutoffHz = 0f });
             var strong = SolverReplay.SolveOneCharacter(_capture, _model,
                 new SolverConfig { SmoothingMinCutoffHz = 0.5f, SmoothingBeta = 0.5f });
