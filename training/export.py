@@ -237,6 +237,6 @@ def add_arguments(parser) -> None:
     parser.add_argument("--out", default=None, help=f"output folder (default {DEFAULT_OUT.relative_to(REPO)})")
     parser.add_argument("--no-mirror", dest="no_mirror", action="store_true",
                         help="export the single network instead of the mirror-averaged pair "
-                             "(model.MirrorEnsemble: half the cost per frame, larger errors)")
+                             "(model.MirrorEnsemble: ~0.7x the time per frame, larger errors)")
     parser.add_argument("--no-check", dest="no_check", action="store_true",
                         help="skip the ONNX Runtime vs PyTorch comparison")
