@@ -142,12 +142,8 @@ int calib_add_frame(calib_accumulator *acc, const raw_frame *frame)
         quat_copy(q, frame->quat[s]);
         if (acc->samples[s] == 0)
             quat_copy(acc->quat_first[s], q);
-        /* q and -q are the same rotation; summing needs them on one hemisphere. */
-        double d = q[0] * acc->quat_first[s][0] + q[1] * acc->quat_first[s][1] +
-                   q[2] * acc->quat_first[s][2] + q[3] * acc->quat_first[s][3];
-        if (d < 0.0)
-            for (int i = 0; i < 4; i++)
-                q[i] = -q[i];
+        /* Summing needs every sample on one hemisphere. */
+        quat_align_hemisphere(q, acc->quat_first[s]);
         for (int i = 0; i < 4; i++)
             acc->quat_sum[s][i] += q[i];
         for (int i = 0; i < 3; i++)

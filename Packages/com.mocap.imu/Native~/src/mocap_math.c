@@ -18,7 +18,19 @@ void quat_copy(double out[4], const double q[4])
 
 double quat_norm(const double q[4])
 {
-    return sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    return sqrt(quat_dot(q, q));
+}
+
+double quat_dot(const double a[4], const double b[4])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+}
+
+void quat_align_hemisphere(double q[4], const double ref[4])
+{
+    if (quat_dot(q, ref) < 0.0)
+        for (int i = 0; i < 4; i++)
+            q[i] = -q[i];
 }
 
 int quat_normalize(double q[4])
@@ -67,7 +79,7 @@ void quat_rotate(double out[3], const double q[4], const double v[3])
 void quat_slerp(double out[4], const double a[4], const double b[4], double t)
 {
     double bb[4];
-    double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    double d = quat_dot(a, b);
     /* q and -q are the same rotation: flip b to take the short way round. */
     double sign = d < 0.0 ? -1.0 : 1.0;
     for (int i = 0; i < 4; i++)

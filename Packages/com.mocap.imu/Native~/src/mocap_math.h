@@ -17,6 +17,10 @@ extern "C" {
 void quat_identity(double q[4]);
 void quat_copy(double out[4], const double q[4]);
 double quat_norm(const double q[4]);
+double quat_dot(const double a[4], const double b[4]);
+/* q and -q are the same rotation: negates q if it lies on the other hemisphere from ref, so
+ * sums, interpolation and differences of nearby rotations see no sign flip. */
+void quat_align_hemisphere(double q[4], const double ref[4]);
 /* Returns 0 on success, -1 if the norm is zero or not finite (q untouched then). */
 int quat_normalize(double q[4]);
 void quat_conjugate(double out[4], const double q[4]);

@@ -36,8 +36,8 @@ void pose_filter_step(pose_filter_state *s, const pose_filter_params *p, double 
         double out[4];
         quat_slerp(out, s->q[j], q[j], smoothing_factor(cutoff, p->dt));   /* unit length */
         quat_copy(s->q[j], out);
-        /* Same rotation, but on the caller's hemisphere (q and -q), as unfiltered output is. */
-        double same = out[0] * q[j][0] + out[1] * q[j][1] + out[2] * q[j][2] + out[3] * q[j][3];
-        for (int k = 0; k < 4; ++k) q[j][k] = same < 0.0 ? -out[k] : out[k];
+        /* Same rotation, but on the caller's hemisphere, as unfiltered output is. */
+        quat_align_hemisphere(out, q[j]);
+        quat_copy(q[j], out);
     }
 }

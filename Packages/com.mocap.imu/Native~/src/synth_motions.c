@@ -587,13 +587,8 @@ mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
             quat_normalize(fr->q[s]);
             /* Keep consecutive samples in one hemisphere so interpolation and differencing
              * never see a sign flip. */
-            if (traj->count > 0) {
-                const double *prev = traj->frames[traj->count - 1].q[s];
-                double dot = 0.0;
-                for (int i = 0; i < 4; i++) dot += prev[i] * fr->q[s][i];
-                if (dot < 0.0)
-                    for (int i = 0; i < 4; i++) fr->q[s][i] = -fr->q[s][i];
-            }
+            if (traj->count > 0)
+                quat_align_hemisphere(fr->q[s], traj->frames[traj->count - 1].q[s]);
         }
         if (st != MOCAP_OK) break;
         traj->count++;

@@ -18,7 +18,7 @@
  *                    [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]
  *                    (poses -> VMC protocol, character i -> i-th --vmc)
  * --smoothing: the solver's one-euro output filter, cut-off at rest (Hz) and its rise per rad/s
- *              of joint speed; default 1,2; 0 = the model's raw output.
+ *              of joint speed; default 1,6; 0 = the model's raw output.
  *   mocapctl bench   decode [--seconds S]
  *   mocapctl bench   pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]
  *                    [--tip-model F] [--max-characters N]                     (tools/bench.c)
