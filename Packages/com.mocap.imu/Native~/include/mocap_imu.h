@@ -204,7 +204,9 @@ MOCAP_API mocap_status mocap_session_start(mocap_session *session);
 MOCAP_API void mocap_session_close(mocap_session *session);
 
 /* Copy the newest frame into *out. MOCAP_ERR_NO_DATA when no frame is newer than the one the
- * previous poll returned; MOCAP_ERR_END_OF_STREAM once a replay is finished and drained.
+ * previous poll returned; MOCAP_ERR_END_OF_STREAM once a replay is finished and drained. A replay
+ * whose file stops reading (a removed drive) finishes there: END_OF_STREAM after the frames read
+ * before the failure, and the stats' last_error names the file and the cause.
  * Consumer thread: one thread at a time polls/drains a session. */
 MOCAP_API mocap_status mocap_session_poll_latest(mocap_session *session, mocap_frame *out);
 
@@ -218,7 +220,7 @@ typedef enum mocap_connection_state {
     MOCAP_CONNECTION_CLOSED = 0,
     MOCAP_CONNECTION_CONNECTED = 1,
     MOCAP_CONNECTION_DISCONNECTED = 2, /* device lost; reconnecting when auto_reconnect */
-    MOCAP_CONNECTION_ENDED = 3         /* replay finished */
+    MOCAP_CONNECTION_ENDED = 3         /* replay finished (or its file stopped reading) */
 } mocap_connection_state;
 
 /* Counters and health of a running session. */

@@ -1,4 +1,8 @@
 /* Streaming BVH writer: see bvh_writer.h. */
+#if !defined(_WIN32)
+#define _FILE_OFFSET_BITS 64 /* long recordings pass 2 GiB */
+#define _POSIX_C_SOURCE 200809L /* ftello, fseeko */
+#endif
 #include "bvh_writer.h"
 
 #include <errno.h>
@@ -8,6 +12,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "platform.h"
 #include "mocap_math.h"
 
 #define PI 3.14159265358979323846
@@ -20,7 +25,7 @@ struct bvh_writer {
     bvh_skeleton skeleton;
     bvh_rotation_order order;
     int32_t file_order[BVH_MAX_JOINTS]; /* depth-first joint order = MOTION column order */
-    long count_offset;                  /* file offset of the frame count digits */
+    int64_t count_offset;               /* file offset of the frame count digits */
     uint64_t frames;                    /* complete frame lines written */
     uint64_t frames_counted;            /* value in the header now */
     uint32_t flush_every;
@@ -216,13 +221,32 @@ static void write_joint(bvh_writer *w, int j, int depth, int *n)
     fputs("}\n", f);
 }
 
+/* 64-bit file offsets: long is 32 bits on Windows, and a long session's BVH passes 2 GiB. */
+static int64_t file_tell(FILE *f)
+{
+#if defined(_WIN32)
+    return _ftelli64(f);
+#else
+    return (int64_t)ftello(f);
+#endif
+}
+
+static int file_seek(FILE *f, int64_t offset)
+{
+#if defined(_WIN32)
+    return _fseeki64(f, offset, SEEK_SET);
+#else
+    return fseeko(f, (off_t)offset, SEEK_SET);
+#endif
+}
+
 static mocap_status write_count(bvh_writer *w)
 {
     if (w->frames == w->frames_counted) return MOCAP_OK;
-    long end = ftell(w->file);
-    if (end < 0 || fseek(w->file, w->count_offset, SEEK_SET) != 0) return io_error(w, "seeking in");
+    int64_t end = file_tell(w->file);
+    if (end < 0 || file_seek(w->file, w->count_offset) != 0) return io_error(w, "seeking in");
     fprintf(w->file, "%-*llu", COUNT_WIDTH, (unsigned long long)w->frames);
-    if (fseek(w->file, end, SEEK_SET) != 0) return io_error(w, "seeking in");
+    if (file_seek(w->file, end) != 0) return io_error(w, "seeking in");
     w->frames_counted = w->frames;
     return MOCAP_OK;
 }
@@ -250,7 +274,7 @@ mocap_status bvh_writer_open(const char *path, const bvh_skeleton *skeleton, dou
     w->skeleton = *skeleton;
     w->order = order;
     w->flush_every = 1;
-    w->file = fopen(path, "wb");
+    w->file = mocap_fopen(path, "wb");
     if (!w->file) {
         char buf[128];
         st = mocap_fail(errno == ENOENT ? MOCAP_ERR_NOT_FOUND : MOCAP_ERR_IO,
@@ -262,7 +286,7 @@ mocap_status bvh_writer_open(const char *path, const bvh_skeleton *skeleton, dou
     int n = 0;
     write_joint(w, 0, 0, &n);
     fputs("MOTION\nFrames: ", w->file);
-    w->count_offset = ftell(w->file);
+    w->count_offset = file_tell(w->file);
     fprintf(w->file, "%-*u\n", COUNT_WIDTH, 0u);
     fprintf(w->file, "Frame Time: %.8f\n", frame_time_s);
     if (n != skeleton->joint_count || ferror(w->file) || fflush(w->file) != 0 || w->count_offset < 0) {
@@ -270,7 +294,7 @@ mocap_status bvh_writer_open(const char *path, const bvh_skeleton *skeleton, dou
                  ? mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "bvh: skeleton is not one tree")
                  : io_error(w, "writing");
         fclose(w->file);
-        remove(path);
+        mocap_remove_file(path);
         free(w);
         return st;
     }

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "platform.h"
 #include "mocap_math.h"
 
 #define ALL_SENSORS ((1u << MOCAP_SENSOR_COUNT) - 1u)
@@ -610,7 +611,7 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
     int n = snprintf(tmp, sizeof tmp, "%s.tmp", path);
     if (n < 0 || (size_t)n >= sizeof tmp)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save: path is too long");
-    FILE *f = fopen(tmp, "w");
+    FILE *f = mocap_fopen(tmp, "w");
     if (!f)
         return open_failure(tmp, "create", errno);
     int ok = fprintf(f, "%s %d\n", CALIB_FILE_HEADER, CALIB_FILE_VERSION) > 0;
@@ -644,18 +645,14 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
         err = errno;
     }
     if (!ok) {
-        remove(tmp);
+        mocap_remove_file(tmp);
         char text[128];
         mocap_errno_text(err, text, sizeof text);
         return mocap_fail(MOCAP_ERR_IO, "calibration file %s: write failed: %s", tmp, text);
     }
-#ifdef _WIN32
-    /* rename() does not replace an existing file on Windows. */
-    remove(path);
-#endif
-    if (rename(tmp, path) != 0) {
-        err = errno;
-        remove(tmp);
+    err = mocap_replace_file(tmp, path);
+    if (err != 0) {
+        mocap_remove_file(tmp);
         char text[128];
         mocap_errno_text(err, text, sizeof text);
         return mocap_fail(MOCAP_ERR_IO, "calibration file %s: cannot replace it: %s", path, text);
@@ -684,7 +681,7 @@ mocap_status calib_load(const char *path, mocap_calibration *out)
 {
     if (!path || !path[0] || !out)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration load: NULL path or output");
-    FILE *f = fopen(path, "r");
+    FILE *f = mocap_fopen(path, "r");
     if (!f)
         return open_failure(path, "open", errno);
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "platform.h"
 #include "onnx_runtime.h"
 
 #if !defined(MOCAP_HAVE_ONNXRUNTIME)
@@ -148,7 +149,7 @@ mocap_status ort_generic_open(const char *path, int intra_op_threads, ort_generi
 {
     if (!out || !path) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "ort_generic_open: NULL");
     *out = NULL;
-    FILE *probe = fopen(path, "rb");
+    FILE *probe = mocap_fopen(path, "rb");
     if (!probe) return mocap_fail(MOCAP_ERR_NOT_FOUND, "model %s: no such file", path);
     fclose(probe);
     mocap_status r = ort_library_load(NULL);

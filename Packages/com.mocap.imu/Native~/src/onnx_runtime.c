@@ -744,7 +744,7 @@ mocap_status ort_model_open(const char *path, const ort_options *options, ort_mo
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "ort_model_open: intra_op_threads %d / "
                           "optimization_level %d out of range", o.intra_op_threads,
                           o.optimization_level);
-    FILE *f = fopen(path, "rb");
+    FILE *f = mocap_fopen(path, "rb");
     if (!f) return mocap_fail(MOCAP_ERR_NOT_FOUND, "model %s: no such file", path);
     fclose(f);
     mocap_status r = ort_library_load(o.library_path);

@@ -4,6 +4,7 @@
 #define MOCAP_PLATFORM_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 #if defined(__cplusplus) && !(defined(_MSC_VER) && !defined(__clang__))
 /* C++ (the tests) has no <stdatomic.h> before C++23. std::atomic<T> has the size, alignment and
@@ -63,7 +64,18 @@ void mocap_mutex_unlock(mocap_mutex *m);
 
 /* Monotonic clock in nanoseconds (arbitrary origin). */
 int64_t mocap_monotonic_ns(void);
+/* Sleeps about ms milliseconds: ~1 ms resolution on Windows too (a high-resolution waitable
+ * timer; plain Sleep(1) lasts a whole 15.6 ms scheduler tick there). */
 void mocap_sleep_ms(int ms);
+
+/* Files by UTF-8 path (the API's paths are UTF-8; Windows' narrow calls would read them in the
+ * ANSI code page). NULL / nonzero with errno set on failure. */
+FILE *mocap_fopen(const char *path, const char *mode);
+int mocap_remove_file(const char *path);
+/* Moves from over to in one step, replacing an existing to (rename(); MoveFileEx on Windows,
+ * where rename() refuses to replace): at every moment one of the two files is complete.
+ * 0 or an errno value. */
+int mocap_replace_file(const char *from, const char *to);
 
 #ifdef __cplusplus
 }

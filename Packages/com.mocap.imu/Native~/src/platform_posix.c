@@ -126,6 +126,15 @@ int64_t mocap_monotonic_ns(void)
     return (int64_t)ts.tv_sec * 1000000000LL + (int64_t)ts.tv_nsec;
 }
 
+FILE *mocap_fopen(const char *path, const char *mode) { return fopen(path, mode); }
+
+int mocap_remove_file(const char *path) { return remove(path); }
+
+int mocap_replace_file(const char *from, const char *to)
+{
+    return rename(from, to) == 0 ? 0 : (errno ? errno : EIO);
+}
+
 void mocap_sleep_ms(int ms)
 {
     if (ms <= 0) return;

@@ -2,6 +2,9 @@
 #ifndef WIN32_LEAN_AND_MEAN
 #define WIN32_LEAN_AND_MEAN
 #endif
+#ifndef _WIN32_WINNT
+#define _WIN32_WINNT 0x0601 /* CreateWaitableTimerExW */
+#endif
 #include <windows.h>
 #include <process.h>
 
@@ -9,6 +12,7 @@
 
 #include "error.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -41,11 +45,32 @@ static void name_current_thread(const char *name)
     (void)set_description(GetCurrentThread(), wide);
 }
 
+#if defined(_MSC_VER)
+#define MOCAP_THREAD_LOCAL __declspec(thread)
+#else
+#define MOCAP_THREAD_LOCAL _Thread_local
+#endif
+#ifndef CREATE_WAITABLE_TIMER_HIGH_RESOLUTION
+#define CREATE_WAITABLE_TIMER_HIGH_RESOLUTION 0x00000002
+#endif
+
+/* One high-resolution timer per sleeping thread (Windows 10 1803 and later; NULL before). */
+static MOCAP_THREAD_LOCAL HANDLE sleep_timer;
+static MOCAP_THREAD_LOCAL int sleep_timer_tried;
+
+static void release_sleep_timer(void)
+{
+    if (sleep_timer) CloseHandle(sleep_timer);
+    sleep_timer = NULL;
+    sleep_timer_tried = 0;
+}
+
 static unsigned __stdcall thread_trampoline(void *arg)
 {
     mocap_thread *t = (mocap_thread *)arg;
     name_current_thread(t->name);
     t->fn(t->arg);
+    release_sleep_timer();
     return 0;
 }
 
@@ -115,5 +140,55 @@ int64_t mocap_monotonic_ns(void)
 void mocap_sleep_ms(int ms)
 {
     if (ms <= 0) return;
+    if (!sleep_timer_tried) {
+        sleep_timer_tried = 1;
+        sleep_timer = CreateWaitableTimerExW(NULL, NULL, CREATE_WAITABLE_TIMER_HIGH_RESOLUTION,
+                                             TIMER_ALL_ACCESS);
+    }
+    if (sleep_timer) {
+        LARGE_INTEGER due;
+        due.QuadPart = -(LONGLONG)ms * 10000; /* relative, 100 ns units */
+        if (SetWaitableTimer(sleep_timer, &due, 0, NULL, NULL, FALSE) &&
+            WaitForSingleObject(sleep_timer, INFINITE) == WAIT_OBJECT_0)
+            return;
+    }
     Sleep((DWORD)ms);
+}
+
+#define WIDE_PATH_MAX 4096
+
+static int to_wide(const char *utf8, wchar_t *out, int cap)
+{
+    if (MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, utf8, -1, out, cap) > 0) return 0;
+    errno = GetLastError() == ERROR_INSUFFICIENT_BUFFER ? ENAMETOOLONG : EINVAL;
+    return -1;
+}
+
+FILE *mocap_fopen(const char *path, const char *mode)
+{
+    wchar_t wpath[WIDE_PATH_MAX], wmode[16];
+    if (to_wide(path, wpath, WIDE_PATH_MAX) != 0 || to_wide(mode, wmode, 16) != 0) return NULL;
+    return _wfopen(wpath, wmode);
+}
+
+int mocap_remove_file(const char *path)
+{
+    wchar_t wpath[WIDE_PATH_MAX];
+    if (to_wide(path, wpath, WIDE_PATH_MAX) != 0) return -1;
+    return _wremove(wpath);
+}
+
+int mocap_replace_file(const char *from, const char *to)
+{
+    wchar_t wfrom[WIDE_PATH_MAX], wto[WIDE_PATH_MAX];
+    if (to_wide(from, wfrom, WIDE_PATH_MAX) != 0 || to_wide(to, wto, WIDE_PATH_MAX) != 0) return errno;
+    if (MoveFileExW(wfrom, wto, MOVEFILE_REPLACE_EXISTING | MOVEFILE_WRITE_THROUGH)) return 0;
+    switch (GetLastError()) {
+    case ERROR_ACCESS_DENIED:
+    case ERROR_SHARING_VIOLATION: return EACCES;
+    case ERROR_FILE_NOT_FOUND:
+    case ERROR_PATH_NOT_FOUND: return ENOENT;
+    case ERROR_DISK_FULL: return ENOSPC;
+    default: return EIO;
+    }
 }

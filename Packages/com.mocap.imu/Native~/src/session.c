@@ -40,7 +40,7 @@ struct mocap_session {
     spsc_ring frames;
     mocap_thread *reader;
     mocap_thread *processor;
-    int started;
+    int started;                /* under lock: start() was called (threads exist or starting) */
     int replay;                 /* data time, not the wall clock, drives frames */
     int replay_fast;            /* replay as fast as possible: back-pressure instead of dropping */
 
@@ -103,6 +103,21 @@ static void set_async_error(mocap_session *s, const char *text)
 /* ---------------------------------------------------------------------------------------- */
 /* Reader thread: device -> byte ring.                                                        */
 
+static void queue_end_of_stream(mocap_session *s)
+{
+    while (!mocap_atomic_load_int(&s->stop)) {
+        byte_chunk *end = (byte_chunk *)spsc_ring_reserve(&s->bytes);
+        if (end) {
+            end->length = 0;
+            end->end_of_stream = 1;
+            end->receive_ns = 0;
+            spsc_ring_commit(&s->bytes);
+            return;
+        }
+        mocap_sleep_ms(IDLE_SLEEP_MS);
+    }
+}
+
 static void reader_main(void *arg)
 {
     mocap_session *s = (mocap_session *)arg;
@@ -148,23 +163,20 @@ static void reader_main(void *arg)
         } else if (st == MOCAP_ERR_TIMEOUT) {
             continue;
         } else if (st == MOCAP_ERR_END_OF_STREAM) {
-            while (!mocap_atomic_load_int(&s->stop)) {
-                byte_chunk *end = (byte_chunk *)spsc_ring_reserve(&s->bytes);
-                if (end) {
-                    end->length = 0;
-                    end->end_of_stream = 1;
-                    end->receive_ns = 0;
-                    spsc_ring_commit(&s->bytes);
-                    break;
-                }
-                mocap_sleep_ms(IDLE_SLEEP_MS);
-            }
+            queue_end_of_stream(s);
             return;
         } else {
             mocap_copy_error(error_text, sizeof error_text);
             set_async_error(s, error_text);
+            if (s->config.source_kind == MOCAP_SOURCE_REPLAY) {
+                /* A capture file that stops reading (a removed drive, a network share gone)
+                 * cannot come back: end the stream there, so that the consumers drain what was
+                 * read and see the end instead of waiting forever. last_error says why. */
+                queue_end_of_stream(s);
+                return;
+            }
             mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_DISCONNECTED);
-            if (!s->config.auto_reconnect || s->config.source_kind == MOCAP_SOURCE_REPLAY) return;
+            if (!s->config.auto_reconnect) return;
             connected = 0;
         }
     }
@@ -192,10 +204,11 @@ static void deliver_frame(void *user, const mocap_frame *frame)
     }
 }
 
-static void publish_snapshots(mocap_session *s)
+/* Hands waiting calibration requests to the pipeline and copies its reports out. s->lock held.
+ * Runs on the processing thread, or on an API thread while no processing thread exists. */
+static void publish_snapshots_locked(mocap_session *s)
 {
     pipeline *p = s->pipe;
-    mocap_mutex_lock(s->lock);
     uint32_t handed = 0;
     while (handed < s->pending_count &&
            pipeline_calibration_schedule(p, s->pending[handed].step, s->pending[handed].start_s,
@@ -231,6 +244,22 @@ static void publish_snapshots(mocap_session *s)
     st->frames_emitted = p->counters.frames_emitted;
     st->sensors_seen_mask = p->counters.sensors_seen_mask;
     if (s->capture) st->capture_bytes_written = capture_writer_bytes_written(s->capture);
+}
+
+static void publish_snapshots(mocap_session *s)
+{
+    mocap_mutex_lock(s->lock);
+    publish_snapshots_locked(s);
+    mocap_mutex_unlock(s->lock);
+}
+
+/* After an API call changed what is waiting: before start() no thread would pick it up, so
+ * publish here. started is read and written under the lock, so this never overlaps the
+ * processing thread, which only exists once started is set. */
+static void publish_if_not_started(mocap_session *s)
+{
+    mocap_mutex_lock(s->lock);
+    if (!s->started) publish_snapshots_locked(s);
     mocap_mutex_unlock(s->lock);
 }
 
@@ -385,16 +414,29 @@ mocap_status mocap_session_open(const mocap_session_config *config, mocap_sessio
 mocap_status mocap_session_start(mocap_session *s)
 {
     if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session is NULL");
-    if (s->started) return mocap_fail(MOCAP_ERR_STATE, "session already started");
-    if (mocap_thread_start(&s->processor, processor_main, s, "mocap-process") != 0)
-        return mocap_fail(MOCAP_ERR_NO_MEMORY, "could not start the processing thread");
-    if (mocap_thread_start(&s->reader, reader_main, s, "mocap-reader") != 0) {
+    mocap_mutex_lock(s->lock);
+    int already = s->started;
+    s->started = 1; /* before the threads exist: see publish_if_not_started */
+    mocap_mutex_unlock(s->lock);
+    if (already) return mocap_fail(MOCAP_ERR_STATE, "session already started");
+    const char *failed = NULL;
+    if (mocap_thread_start(&s->processor, processor_main, s, "mocap-process") != 0) {
+        failed = "could not start the processing thread";
+    } else if (mocap_thread_start(&s->reader, reader_main, s, "mocap-reader") != 0) {
+        failed = "could not start the reader thread";
         mocap_atomic_store_int(&s->stop, 1);
         mocap_thread_join(s->processor);
         s->processor = NULL;
-        return mocap_fail(MOCAP_ERR_NO_MEMORY, "could not start the reader thread");
     }
-    s->started = 1;
+    if (failed) {
+        /* Back to the unstarted state, so that a later start() can succeed. */
+        mocap_atomic_store_int(&s->stop, 0);
+        mocap_atomic_store_int(&s->processing_done, 0);
+        mocap_mutex_lock(s->lock);
+        s->started = 0;
+        mocap_mutex_unlock(s->lock);
+        return mocap_fail(MOCAP_ERR_NO_MEMORY, "%s", failed);
+    }
     return MOCAP_OK;
 }
 
@@ -482,7 +524,7 @@ mocap_status mocap_calibration_schedule(mocap_session *s, int32_t step, double s
     calibration_request r = {step, start_s, duration_s};
     s->pending[s->pending_count++] = r;
     mocap_mutex_unlock(s->lock);
-    if (!s->started) publish_snapshots(s);
+    publish_if_not_started(s);
     return MOCAP_OK;
 }
 
@@ -546,7 +588,7 @@ mocap_status mocap_calibration_set(mocap_session *s, const mocap_calibration *ca
     s->calibration_to_set = *cal;
     s->calibration_set_pending = 1;
     mocap_mutex_unlock(s->lock);
-    if (!s->started) publish_snapshots(s);
+    publish_if_not_started(s);
     return MOCAP_OK;
 }
 

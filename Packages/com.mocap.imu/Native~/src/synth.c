@@ -18,6 +18,7 @@
 
 #include "capture_file.h"
 #include "error.h"
+#include "platform.h"
 #include "hipnuc_decoder.h"
 #include "mocap_math.h"
 
@@ -483,7 +484,7 @@ mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion
     ctx.capture_path = capture_path;
     ctx.truth_path = truth_path;
     if (truth_path && truth_path[0]) {
-        ctx.truth = fopen(truth_path, "w");
+        ctx.truth = mocap_fopen(truth_path, "w");
         if (!ctx.truth) {
             int e = errno;
             char buf[128];

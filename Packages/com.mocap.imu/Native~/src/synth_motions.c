@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "platform.h"
 #include "mocap_math.h"
 
 /* ------------------------------------------------------------------------------------------ */
@@ -452,7 +453,7 @@ static void angular_velocity_between(double out[3], const double a[4], const dou
 
 static mocap_status read_whole_file(const char *path, char **text, size_t *len)
 {
-    FILE *f = fopen(path, "rb");
+    FILE *f = mocap_fopen(path, "rb");
     if (!f) {
         int e = errno;
         char buf[128];

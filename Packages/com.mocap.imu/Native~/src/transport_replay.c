@@ -15,7 +15,7 @@ typedef struct replay_transport {
     capture_reader *reader;
     int realtime;
     double speed;
-    int64_t open_mono_ns;   /* live time the first record maps to */
+    int64_t first_mono_ns;  /* live time the first record maps to: when it was read */
     int64_t first_record_ns;
     int have_first;
     /* The record being delivered: held while it is not yet due, or while a small cap makes
@@ -31,12 +31,15 @@ typedef struct replay_transport {
 static int64_t due_time(replay_transport *r, int64_t recorded_ns)
 {
     if (!r->have_first) {
+        /* Pace from the first read (the session's start), not from open: records recorded
+         * within the gap between open and start would otherwise all be overdue at once. */
+        r->first_mono_ns = mocap_monotonic_ns();
         r->first_record_ns = recorded_ns;
         r->have_first = 1;
     }
     /* Offsets from the first record keep the arithmetic exact over long captures. */
     double offset = (double)(recorded_ns - r->first_record_ns) / r->speed;
-    return r->open_mono_ns + (int64_t)llround(offset);
+    return r->first_mono_ns + (int64_t)llround(offset);
 }
 
 static mocap_status replay_read(transport *t, uint8_t *buf, size_t cap, int timeout_ms,
@@ -122,7 +125,6 @@ mocap_status transport_open_replay(const char *path, int realtime, double speed,
     snprintf(r->base.description, sizeof r->base.description, "capture file %s", path);
     r->realtime = realtime;
     r->speed = realtime ? speed : 1.0;
-    r->open_mono_ns = mocap_monotonic_ns();
     *out = &r->base;
     return MOCAP_OK;
 }

@@ -56,18 +56,22 @@ static const char *socket_error_text(int err, char *buf, size_t cap)
 }
 
 #if defined(_WIN32)
-/* Winsock is started once per process (WSAStartup counts its own references). */
+/* Winsock is started once per process (WSAStartup counts its own references). InitOnce makes
+ * a second thread wait until the first one's WSAStartup has finished; a failed start is retried
+ * by the next call. */
+static BOOL CALLBACK start_winsock(PINIT_ONCE once, PVOID param, PVOID *context)
+{
+    (void)once;
+    (void)param;
+    (void)context;
+    WSADATA data;
+    return WSAStartup(MAKEWORD(2, 2), &data) == 0;
+}
+
 static int winsock_up(void)
 {
-    static volatile LONG started = 0;
-    if (InterlockedCompareExchange(&started, 1, 0) == 0) {
-        WSADATA data;
-        if (WSAStartup(MAKEWORD(2, 2), &data) != 0) {
-            InterlockedExchange(&started, 0);
-            return -1;
-        }
-    }
-    return 0;
+    static INIT_ONCE once = INIT_ONCE_STATIC_INIT;
+    return InitOnceExecuteOnce(&once, start_winsock, NULL, NULL) ? 0 : -1;
 }
 #endif
 

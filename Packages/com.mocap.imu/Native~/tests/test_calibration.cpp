@@ -2,6 +2,8 @@
 // headings and mountings), refusals, heading reset, apply flags/preview, progress, file format.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -714,6 +716,30 @@ TEST(CalibrationFile, SaveLoadRoundTrip)
     EXPECT_EQ(calib_save(&cal, path.c_str()), MOCAP_OK) << mocap_last_error();
     EXPECT_EQ(calib_load(path.c_str(), &again), MOCAP_OK) << mocap_last_error();
     EXPECT_EQ(again.valid_mask, 0u);
+}
+
+// Paths are UTF-8 (a user folder such as "Jürgen"); a save that cannot replace its target
+// fails with a message naming it and leaves no temporary file behind.
+TEST(CalibrationFile, Utf8PathsAndAFailedReplaceIsReported)
+{
+    Rig rig(52, MOCAP_WORLD_ENU);
+    static mocap_calibration cal, loaded;
+    calibrate(rig, cal);
+    std::filesystem::path dir = std::filesystem::u8path(test_temp_path("J\xc3\xbcrgen M\xc3\xbcller"));
+    std::filesystem::create_directories(dir);
+    std::string path = (dir / "kalibrierung.txt").u8string();
+    ASSERT_EQ(calib_save(&cal, path.c_str()), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(calib_load(path.c_str(), &loaded), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(std::memcmp(loaded.sensor_to_bone, cal.sensor_to_bone, sizeof cal.sensor_to_bone), 0);
+
+    // The target is a non-empty folder: the replace step must fail, not write around it.
+    std::string blocked = (dir / "blocked").u8string();
+    std::filesystem::create_directories(std::filesystem::u8path(blocked + "/inside"));
+    EXPECT_EQ(calib_save(&cal, blocked.c_str()), MOCAP_ERR_IO);
+    EXPECT_NE(std::string(mocap_last_error()).find("cannot replace"), std::string::npos) << mocap_last_error();
+    EXPECT_NE(std::string(mocap_last_error()).find("blocked"), std::string::npos) << mocap_last_error();
+    EXPECT_FALSE(std::filesystem::exists(std::filesystem::u8path(blocked + ".tmp")));
+    EXPECT_TRUE(std::filesystem::is_directory(std::filesystem::u8path(blocked + "/inside")));
 }
 
 TEST(CalibrationFile, CorruptFilesRejectedWithLineNumbers)

@@ -644,3 +644,111 @@ TEST(Session, RealtimeReplayKeepsTheRecordedTimeline)
     // 2.2 s of capture at 4x takes at least ~0.55 s of wall time when paced.
     EXPECT_GE(wall[1], 0.45);
 }
+
+namespace {
+
+// The descriptor this process holds open on path (Linux: /proc/self/fd), or -1.
+int find_open_descriptor(const std::string &path)
+{
+    const std::string want = std::filesystem::canonical(path).string();
+    for (const auto &entry : std::filesystem::directory_iterator("/proc/self/fd")) {
+        std::error_code ec;
+        auto target = std::filesystem::read_symlink(entry.path(), ec);
+        if (!ec && target.string() == want) return std::stoi(entry.path().filename().string());
+    }
+    return -1;
+}
+
+}  // namespace
+
+// A capture file that stops reading mid-replay (its drive removed) ends the stream there: the
+// consumers drain what was read and get END_OF_STREAM, with the cause in last_error, instead of
+// NO_DATA forever.
+TEST(Session, ReplayReadFailureEndsTheStreamWithTheCause)
+{
+    if (!std::filesystem::exists("/proc/self/fd")) GTEST_SKIP() << "needs /proc/self/fd";
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 31;
+    cfg.heading_s = 0.5;
+    cfg.strap_s = 0.2;
+    cfg.tpose_s = 0.5;
+    cfg.motion_s = 6.0;
+    std::string capture = test_temp_path("vanishing.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    mocap_session_config config = replay_config(capture);
+    config.replay_realtime = 1;
+    config.replay_speed = 1.0f;
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK);
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+    std::vector<mocap_frame> frames;
+    ASSERT_TRUE(wait_until(session.s, 10.0, &frames, [&](const mocap_session_stats &) { return frames.size() >= 20; }));
+    // From now on every read of the file fails (EISDIR), as a vanished drive's would (EIO).
+    int fd = find_open_descriptor(capture);
+    ASSERT_GE(fd, 0);
+    int dir = open(std::filesystem::path(capture).parent_path().c_str(), O_RDONLY | O_DIRECTORY);
+    ASSERT_GE(dir, 0);
+    ASSERT_EQ(dup2(dir, fd), fd);
+    close(dir);
+    auto t0 = Clock::now();
+    mocap_status st = MOCAP_ERR_NO_DATA;
+    std::vector<mocap_frame> buf(64);
+    while (seconds_since(t0) < 10.0) {
+        uint32_t n = 0;
+        st = mocap_session_drain(session.s, buf.data(), (uint32_t)buf.size(), &n);
+        frames.insert(frames.end(), buf.begin(), buf.begin() + n);
+        if (st == MOCAP_ERR_END_OF_STREAM) break;
+        if (n == 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    ASSERT_EQ(st, MOCAP_ERR_END_OF_STREAM) << "the stream never ended after the file failed";
+    // 7.2 s of capture at 100 Hz: the failure came well before its end.
+    EXPECT_LT(frames.size(), 600u);
+    mocap_session_stats stats;
+    ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
+    EXPECT_EQ(stats.connection_state, MOCAP_CONNECTION_ENDED);
+    EXPECT_NE(std::string(stats.last_error).find("read failed"), std::string::npos) << stats.last_error;
+    EXPECT_NE(std::string(stats.last_error).find("vanishing.cap"), std::string::npos) << stats.last_error;
+}
+
+// Calibration requests may come from any thread, also while another thread starts the session:
+// each one lands exactly once (and ThreadSanitizer sees no race on the pipeline).
+TEST(Session, CalibrationRequestsRacingStartAreAllApplied)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 32;
+    std::string capture = test_temp_path("race.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    for (int round = 0; round < 20; ++round) {
+        mocap_session_config config = replay_config(capture);
+        config.replay_realtime = 1;
+        SessionCloser session;
+        ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK);
+        mocap_calibration cal;
+        ASSERT_EQ(mocap_calibration_get(session.s, &cal), MOCAP_OK);
+        cal.acceleration_offset[0][0] = 0.25f + 0.01f * (float)round;
+        std::atomic<int> go{0};
+        std::thread other([&] {
+            while (!go.load()) {}
+            EXPECT_EQ(mocap_calibration_set(session.s, &cal), MOCAP_OK);
+            EXPECT_EQ(mocap_calibration_schedule(session.s, MOCAP_CALIBRATION_HEADING, 1000.0, 1.0f), MOCAP_OK);
+        });
+        go.store(1);
+        ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+        other.join();
+        mocap_calibration got;
+        mocap_calibration_report step;
+        bool applied = false;
+        auto t0 = Clock::now();
+        while (!applied && seconds_since(t0) < 5.0) {
+            ASSERT_EQ(mocap_calibration_get(session.s, &got), MOCAP_OK);
+            ASSERT_EQ(mocap_calibration_get_step_report(session.s, MOCAP_CALIBRATION_HEADING, &step), MOCAP_OK);
+            applied = got.acceleration_offset[0][0] == cal.acceleration_offset[0][0] &&
+                      step.state == MOCAP_CALIBRATION_WAITING;
+            if (!applied) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+        EXPECT_TRUE(applied) << "round " << round;
+        EXPECT_EQ(mocap_session_start(session.s), MOCAP_ERR_STATE);
+    }
+}

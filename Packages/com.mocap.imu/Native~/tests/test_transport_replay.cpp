@@ -189,3 +189,34 @@ TEST(TransportReplay, OpenErrorsNameTheFile)
     EXPECT_EQ(transport_open_replay(path.c_str(), 1, NAN, &t), MOCAP_ERR_INVALID_ARGUMENT);
     EXPECT_EQ(t, nullptr);
 }
+
+// Pacing starts at the first read (the session's start), not at open: a UI that opens, sets up
+// and starts a few hundred ms later must not get those records in one burst.
+TEST(TransportReplay, RealtimePacingStartsAtTheFirstReadNotAtOpen)
+{
+    const std::string path = test_temp_path("late_start.mcap");
+    auto recs = make_records(11, 41, 32, 5000000000LL, 10000000); // 0.4 s, 10 ms apart
+    write_capture(path, recs);
+    transport *t = nullptr;
+    ASSERT_EQ(transport_open_replay(path.c_str(), 1, 1.0, &t), MOCAP_OK) << mocap_last_error();
+    mocap_sleep_ms(300);
+    std::vector<uint8_t> buf(CAPTURE_MAX_RECORD);
+    int64_t first_read = 0;
+    size_t delivered = 0;
+    const int64_t give_up = mocap_monotonic_ns() + 10000000000LL;
+    while (delivered < recs.size() && mocap_monotonic_ns() < give_up) {
+        size_t got = 0;
+        int64_t ns = 0;
+        const int64_t asked = mocap_monotonic_ns();
+        mocap_status st = transport_read(t, buf.data(), buf.size(), 5, &got, &ns);
+        if (st == MOCAP_ERR_TIMEOUT) continue;
+        ASSERT_EQ(st, MOCAP_OK) << mocap_last_error();
+        if (delivered == 0) first_read = asked;
+        ASSERT_EQ(ns, recs[delivered].ns);
+        // Due at its recorded offset after the first read; 1 ms of slack for the clock reads.
+        ASSERT_GE(mocap_monotonic_ns() - first_read, (ns - recs[0].ns) - 1000000) << delivered;
+        ++delivered;
+    }
+    EXPECT_EQ(delivered, recs.size());
+    transport_close(t);
+}

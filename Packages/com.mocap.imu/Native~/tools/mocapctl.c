@@ -413,6 +413,16 @@ static void account_frame(replay_state *st, const mocap_frame *f)
     }
 }
 
+/* A replay whose file stopped reading ends early, with the cause in the stats: say so and fail
+ * (the output covers only part of the capture). Returns 0 when the replay read to the end. */
+static int replay_ended_early(mocap_session *session)
+{
+    mocap_session_stats stats;
+    if (mocap_session_get_stats(session, &stats) != MOCAP_OK || stats.last_error[0] == '\0') return 0;
+    fprintf(stderr, "mocapctl: the replay stopped before the end of the capture: %s\n", stats.last_error);
+    return 1;
+}
+
 /* Drains available frames; returns 1 at the end of the stream. */
 static int pump(replay_state *st)
 {
@@ -573,7 +583,7 @@ static int cmd_replay(int argc, char **argv)
     if (st->have_truth)
         printf("  bone orientation error against the generator's truth (motion phase): worst sensor "
                "mean %.3f deg\n", worst_mean);
-    rc = 0;
+    rc = replay_ended_early(st->session);
 done:
     if (st->session) mocap_session_close(st->session);
     if (st->csv) fclose(st->csv);
@@ -1204,6 +1214,7 @@ static int cmd_replay_pose(int argc, char **argv)
     rc = (cal_failed || written == 0) ? 1 : 0;
     if (written == 0) fprintf(stderr, "mocapctl: no pose was solved (calibration %s)\n",
                               cal_failed ? "refused" : "missing");
+    if (replay_ended_early(session)) rc = 1;
 done:
     /* Solver first (it consumes the session), then the session, then the model. */
     if (solver) mocap_solver_close(solver);
