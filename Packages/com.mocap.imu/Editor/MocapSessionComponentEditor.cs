@@ -196,6 +196,20 @@ namespace Mocap.Imu.Editor
             var avatar = MocapComponentBridge.Avatar(component, character);
             var info = MocapComponentBridge.GetModelInfo(component);
             PoseTake take = info != null ? new PoseTake(info) : null;
+            if (take != null && component is MocapSessionComponent typed)
+            {
+                // Every solved pose, not the newest per rendered frame: a 30 fps editor would keep
+                // half of a 60 Hz model's poses, and the take's BVH (fixed 1/rate frame time) would
+                // play twice as fast as the clip.
+                var recorder = new TakeRecorder(avatar, null, take);
+                MocapSessionComponent.PoseHandler keep = (int c, in MocapPose pose) =>
+                {
+                    if (c == character && recorder.IsRecording) take.Add(pose);
+                };
+                typed.PoseSolved += keep;
+                recorder.Ended += () => typed.PoseSolved -= keep;
+                return;
+            }
             TakeRecorder.PoseSource source = (out MocapPose pose) =>
                 MocapComponentBridge.TryGetLatestPose(component, character, out pose);
             new TakeRecorder(avatar, source, take);

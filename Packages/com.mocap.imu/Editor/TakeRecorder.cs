@@ -1,6 +1,7 @@
 // Records a driven avatar to an AnimationClip in the editor (UnityEditor.Animations.GameObjectRecorder:
-// every Transform under the root, one snapshot per frame), and the solved poses of the same frames
-// to a core PoseTake so the take can be exported to BVH. Thin: naming, pose bookkeeping and BVH
+// every Transform under the root, one snapshot per frame), and the solved poses to a core PoseTake
+// so the take can be exported to BVH: every pose at the model's rate when the inspector feeds it
+// from MocapSessionComponent.PoseSolved, else the pose of each snapshot (PoseSource). Thin: naming, pose bookkeeping and BVH
 // live in the engine-free core (Recording/PoseTake.cs, BvhExporter.cs).
 //
 // In Play Mode a snapshot is taken once per player frame after LateUpdate (a PlayerLoop system
@@ -81,6 +82,9 @@ namespace Mocap.Imu.Editor
         /// <summary>Poses kept so far.</summary>
         public int PoseCount => _take?.Count ?? 0;
 
+        /// <summary>Raised once when the take stops, saved or not (listeners unsubscribe here).</summary>
+        public event Action Ended;
+
         /// <summary>Any recorder running for this root.</summary>
         public static TakeRecorder For(GameObject root) => Active.Find(r => r.Root == root);
 
@@ -111,6 +115,7 @@ namespace Mocap.Imu.Editor
             if (_recorder == null) throw new InvalidOperationException("the take is already stopped");
             Unhook();
             Active.Remove(this);
+            RaiseEnded();
             var result = new TakeResult { Frames = Frames };
             var name = TakeNaming.TakeName(StartedAt, prefix ?? (Root ? Root.name : null));
             var clip = new AnimationClip { name = name };
@@ -142,8 +147,17 @@ namespace Mocap.Imu.Editor
             if (_recorder == null) return;
             Unhook();
             Active.Remove(this);
+            RaiseEnded();
             _recorder.ResetRecording();
             _recorder = null;
+        }
+
+        void RaiseEnded()
+        {
+            var ended = Ended;
+            Ended = null;
+            try { ended?.Invoke(); }
+            catch (Exception e) { Debug.LogException(e); }
         }
 
         /// <summary>Create an "Assets/..." folder chain if missing.</summary>

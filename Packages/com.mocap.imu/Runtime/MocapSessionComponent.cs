@@ -83,6 +83,9 @@ namespace Mocap.Imu
 
         Engine _engine;
         Task<Engine> _opening;
+        // An open that Close() gave up on: it disposes what it opened once done. The next open
+        // waits for it, since it holds the same serial ports and files until then.
+        Task _abandoned;
         bool _recording;
         string[] _recordingPaths = Array.Empty<string>();
         float _nextStatusText;
@@ -117,6 +120,16 @@ namespace Mocap.Imu
 
         /// <summary>Raised on the main thread once the engine runs (after each open or restart).</summary>
         public event Action<MocapSessionComponent> Opened;
+
+        /// <summary>Receives one solved pose of a character.</summary>
+        public delegate void PoseHandler(int character, in MocapPose pose);
+
+        /// <summary>
+        /// Raised on the main thread (from Update) for every pose drained, oldest first: also the
+        /// poses solved between two rendered frames, which <see cref="TryGetLatestPose"/> skips.
+        /// Recorders that must keep every frame of the model's rate listen here.
+        /// </summary>
+        public event PoseHandler PoseSolved;
 
         /// <summary>Raised on the main thread before the engine closes.</summary>
         public event Action<MocapSessionComponent> Closing;
@@ -183,7 +196,11 @@ namespace Mocap.Imu
                 return;
             }
             SetStatus(MocapComponentStatus.Opening, "");
-            _opening = Task.Run(() => OpenEngine(request));
+            var previous = _abandoned;
+            _abandoned = null;
+            _opening = previous != null && !previous.IsCompleted
+                ? previous.ContinueWith(_ => OpenEngine(request), TaskScheduler.Default)
+                : Task.Run(() => OpenEngine(request));
         }
 
         // Worker thread: no Unity API here.
@@ -240,7 +257,8 @@ namespace Mocap.Imu
             if (_opening != null)
             {
                 // Still opening: whatever it opens is closed on the worker once it is done.
-                _opening.ContinueWith(t => { if (t.Status == TaskStatus.RanToCompletion) t.Result.Dispose(); });
+                _abandoned = _opening.ContinueWith(t => { if (t.Status == TaskStatus.RanToCompletion) t.Result.Dispose(); },
+                                                   TaskScheduler.Default);
                 _opening = null;
             }
             if (_engine != null)
@@ -312,6 +330,7 @@ namespace Mocap.Imu
                             _latest[c] = _drain[count - 1];
                             _hasPose[c] = true;
                             _poseCount[c] += (ulong)count;
+                            if (PoseSolved != null) RaisePoseSolved(c, count);
                         }
                         if (result != MocapPollResult.Frames || count < DrainCapacity) break;
                     }
@@ -333,6 +352,16 @@ namespace Mocap.Imu
             {
                 _nextStatusText = Time.unscaledTime + 0.5f;
                 statusText = BuildStatusText();
+            }
+        }
+
+        void RaisePoseSolved(int character, int count)
+        {
+            for (int i = 0; i < count; i++)
+            {
+                // A failing listener must not stop the capture (or the other listeners' frames).
+                try { PoseSolved?.Invoke(character, in _drain[i]); }
+                catch (Exception e) { Debug.LogException(e, this); }
             }
         }
 
