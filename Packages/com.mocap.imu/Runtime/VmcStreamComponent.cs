@@ -35,6 +35,8 @@ namespace Mocap.Imu
         VmcSender[] _senders = Array.Empty<VmcSender>();
         ulong[] _lastSequence = Array.Empty<ulong>();
         bool[] _sentAny = Array.Empty<bool>();
+        // The destinations' characters as opened: the inspector list may change during Play.
+        int[] _characters = Array.Empty<int>();
         float _nextStatus;
 
         MocapModel _openedFor;
@@ -51,6 +53,8 @@ namespace Mocap.Imu
             _senders = new VmcSender[destinations.Count];
             _lastSequence = new ulong[destinations.Count];
             _sentAny = new bool[destinations.Count];
+            _characters = new int[destinations.Count];
+            for (int i = 0; i < destinations.Count; i++) _characters[i] = destinations[i].character;
             var text = new System.Text.StringBuilder();
             for (int i = 0; i < destinations.Count; i++)
             {
@@ -79,7 +83,7 @@ namespace Mocap.Imu
             if (session == null) return;
             // (Re)open for each engine the session opens; senders keep their own skeleton copy.
             var model = session.Status == MocapComponentStatus.Running ? session.Model : null;
-            if (model != _openedFor)
+            if (model != _openedFor || (model != null && destinations.Count != _senders.Length))
             {
                 if (model != null) OpenSenders(session);
                 else CloseSenders();
@@ -88,12 +92,22 @@ namespace Mocap.Imu
             {
                 var sender = _senders[i];
                 if (sender == null) continue;
-                int c = destinations[i].character;
-                if (!session.TryGetLatestPose(c, out var pose)) continue;
+                if (!session.TryGetLatestPose(_characters[i], out var pose)) continue;
                 if (_sentAny[i] && pose.Sequence == _lastSequence[i]) continue;
                 _lastSequence[i] = pose.Sequence;
                 _sentAny[i] = true;
-                sender.Send(in pose);
+                try
+                {
+                    sender.Send(in pose);
+                }
+                catch (MocapException e)
+                {
+                    // Reported once; the other destinations keep streaming.
+                    Debug.LogError($"[Mocap IMU] VMC {sender.Destination}: {e.Message}; this destination stops", this);
+                    statusText = $"{sender.Destination}: {e.Message}\n";
+                    sender.Dispose();
+                    _senders[i] = null;
+                }
             }
             if (Time.unscaledTime >= _nextStatus && _senders.Length > 0)
             {

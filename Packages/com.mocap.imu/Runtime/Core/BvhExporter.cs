@@ -57,7 +57,16 @@ namespace Mocap.Imu.Recording
         public bool IsClosed => _writer == IntPtr.Zero;
 
         /// <summary>Frames appended so far (the engine's count).</summary>
-        public long FrameCount => _writer == IntPtr.Zero ? _closedFrames : (long)NativeBvhMethods.mocap_bvh_frames(_writer);
+        public long FrameCount
+        {
+            get
+            {
+                var writer = _writer;
+                long frames = writer == IntPtr.Zero ? _closedFrames : (long)NativeBvhMethods.mocap_bvh_frames(writer);
+                GC.KeepAlive(this);
+                return frames;
+            }
+        }
 
         long _closedFrames;
 
@@ -130,6 +139,8 @@ namespace Mocap.Imu.Recording
             // A copy on the stack: the engine needs an address and `in` gives a readonly reference.
             MocapPose copy = pose;
             var status = NativeBvhMethods.mocap_bvh_append(writer, &copy);
+            // Until the native call has returned, the finalizer must not close the writer.
+            GC.KeepAlive(this);
             if (status != MocapStatus.Ok) throw NativeMethods.Failure(status);
         }
 
@@ -145,6 +156,7 @@ namespace Mocap.Imu.Recording
                     if (status != MocapStatus.Ok) throw NativeMethods.Failure(status);
                 }
             }
+            GC.KeepAlive(this); // see Append(in MocapPose)
         }
 
         /// <summary>

@@ -243,9 +243,13 @@ namespace Mocap.Imu
             get
             {
                 ThrowIfDisposed();
-                if (_handle == null)
+                // One read: another thread's Stop() may clear the field meanwhile. A call already
+                // holding the handle then completes (SafeHandle defers the close) or gets
+                // ObjectDisposedException, never a null handle.
+                var handle = System.Threading.Volatile.Read(ref _handle);
+                if (handle == null)
                     throw new InvalidOperationException("the session is stopped; Start() reopens it");
-                return _handle;
+                return handle;
             }
         }
 

@@ -83,9 +83,9 @@ namespace Mocap.Imu.Capture
                     $"frame recording {path}:{lineNumber}: {cells.Length} columns, expected {Columns}");
             var frame = new MocapFrame
             {
-                Sequence = ulong.Parse(cells[0], CultureInfo.InvariantCulture),
+                Sequence = Unsigned(cells[0], path, lineNumber),
                 TimeSeconds = Double(cells[1], path, lineNumber),
-                Flags = (MocapFrameFlags)uint.Parse(cells[2], CultureInfo.InvariantCulture),
+                Flags = (MocapFrameFlags)(uint)Unsigned(cells[2], path, lineNumber, uint.MaxValue),
             };
             for (int s = 0; s < MocapSession.SensorCount; s++)
             {
@@ -97,7 +97,7 @@ namespace Mocap.Imu.Capture
                         Number(cells[c + 3], path, lineNumber)),
                     BoneAcceleration = new MocapVector3(Number(cells[c + 4], path, lineNumber),
                         Number(cells[c + 5], path, lineNumber), Number(cells[c + 6], path, lineNumber)),
-                    Flags = (MocapSensorFlags)uint.Parse(cells[c + 7], CultureInfo.InvariantCulture),
+                    Flags = (MocapSensorFlags)(uint)Unsigned(cells[c + 7], path, lineNumber, uint.MaxValue),
                 };
                 // The CSV has no fresh mask; a valid sensor that is not held was fresh.
                 if ((sensor.Flags & (MocapSensorFlags.Valid | MocapSensorFlags.Held)) == MocapSensorFlags.Valid)
@@ -105,6 +105,14 @@ namespace Mocap.Imu.Capture
                 frame.SetSensor((MocapSegment)s, sensor);
             }
             return frame;
+        }
+
+        static ulong Unsigned(string text, string path, int lineNumber, ulong max = ulong.MaxValue)
+        {
+            if (!ulong.TryParse(text, NumberStyles.None, CultureInfo.InvariantCulture, out ulong value) || value > max)
+                throw new MocapException(MocapStatus.Format,
+                    $"frame recording {path}:{lineNumber}: '{text}' is not a whole number from 0 to {max}");
+            return value;
         }
 
         static float Number(string text, string path, int lineNumber) =>

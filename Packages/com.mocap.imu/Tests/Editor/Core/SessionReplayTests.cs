@@ -335,6 +335,28 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual(frames[frames.Length - 1].Head.BoneOrientation.X, last.Head.BoneOrientation.X, 1e-6);
         }
 
+        [TestCase(0, "12x")]
+        [TestCase(0, "-1")]
+        [TestCase(2, "4294967296")]
+        [TestCase(10, "7.5")]
+        public void FrameRecordingNamesTheFileAndLineOfABadWholeNumber(int column, string bad)
+        {
+            // Sequence, frame flags and sensor flags are whole numbers: a corrupt cell is a format
+            // error naming the file and line, like a bad float cell, not a bare FormatException.
+            var path = Path.Combine(TestPaths.NewTempDirectory("corrupt"), "frames.csv");
+            FrameRecording.Save(path, _run.Frames.ToArray());
+            var lines = File.ReadAllLines(path);
+            int row = Array.FindIndex(lines, l => l.Length > 0 && char.IsDigit(l[0])) + 2; // the second frame
+            var cells = lines[row].Split(',');
+            cells[column] = bad;
+            lines[row] = string.Join(",", cells);
+            File.WriteAllLines(path, lines);
+            var e = Assert.Throws<MocapException>(() => FrameRecording.Load(path));
+            Assert.AreEqual(MocapStatus.Format, e.Status);
+            StringAssert.Contains($"frames.csv:{row + 1}:", e.Message);
+            StringAssert.Contains(bad, e.Message);
+        }
+
         [Test]
         public void PollLatestReturnsTheNewestFrameThenNoData()
         {
