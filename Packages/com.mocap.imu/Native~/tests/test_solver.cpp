@@ -591,11 +591,15 @@ TEST_F(SolverOnShippedModel, UnpluggedCharacterDoesNotStallTheOthers)
             std::this_thread::sleep_for(std::chrono::milliseconds(5));
         }
     };
-    pump(1.5);
-    std::vector<uint64_t> before = counts;
-    EXPECT_GT(before[0], 40u) << "the live character produced poses before the unplug";
-    EXPECT_GT(before[1], 40u);
-    EXPECT_GT(before[2], 40u);
+    // Progress is awaited, not timed: a loaded machine (CI, a training job) may start slowly.
+    auto pump_until = [&](double timeout_s, auto done) {
+        auto t0 = Clock::now();
+        while (!done() && seconds_since(t0) < timeout_s) pump(0.05);
+        return done();
+    };
+    ASSERT_TRUE(pump_until(15.0, [&] { return counts[0] > 40 && counts[1] > 40 && counts[2] > 40; }))
+        << "every character produces poses before the unplug: " << counts[0] << " " << counts[1] << " "
+        << counts[2];
     {
         std::lock_guard<std::mutex> g(master_lock);
         plugged = false;
@@ -603,12 +607,20 @@ TEST_F(SolverOnShippedModel, UnpluggedCharacterDoesNotStallTheOthers)
     }
     pump(0.5);  // the unplug is noticed; the live character's last held frames drain
     std::vector<uint64_t> mid = counts;
-    pump(2.0);
+    // The replays go on (two seconds of their poses) ...
+    EXPECT_TRUE(pump_until(15.0, [&] { return counts[1] >= mid[1] + 120 && counts[2] >= mid[2] + 120; }))
+        << counts[1] - mid[1] << " " << counts[2] - mid[2];
+    // ... without falling behind their sessions: a solver that waited for the unplugged
+    // character, even for a bounded time per frame, would leave their frames piling up.
+    for (int c = 1; c <= 2; ++c) {
+        pump(0.1);
+        mocap_session_stats rs;
+        mocap_session_get_stats(sessions.list[c], &rs);
+        EXPECT_LE((double)rs.frames_emitted - (double)counts[c], 30.0)
+            << "replay " << c << ": " << rs.frames_emitted << " frames, " << counts[c] << " poses";
+    }
     stop = true;
     writer.join();
-    // The replays kept their pace (60 poses/s, allow 20 % for a loaded machine) ...
-    for (int c = 1; c <= 2; ++c)
-        EXPECT_GT((double)(counts[c] - mid[c]), 0.8 * 60 * 2.0) << c;
     // ... while the unplugged character produced nothing more.
     EXPECT_EQ(counts[0], mid[0]);
     mocap_session_stats ss;
