@@ -134,7 +134,8 @@ namespace Mocap.Imu
         /// Copy the newest frame into <paramref name="frame"/>, skipping older ones. Returns
         /// <see cref="MocapPollResult.NoData"/> when nothing is newer than the previous poll
         /// (frame is left as it was) and <see cref="MocapPollResult.EndOfStream"/> once a replay
-        /// is finished and drained. Allocates nothing.
+        /// is finished and drained (also when its file stopped reading part way: the stats'
+        /// LastError then names the file and the cause). Allocates nothing.
         /// </summary>
         public unsafe MocapPollResult PollLatest(ref MocapFrame frame)
         {
