@@ -99,6 +99,19 @@ mocap_session_config replay_config(const std::string &path)
     return c;
 }
 
+// A walk capture with a short calibration prelude (1.2 s) before motion_s of motion.
+bool write_short_walk(const std::string &path, uint32_t seed, double motion_s)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = seed;
+    cfg.heading_s = 0.5;
+    cfg.strap_s = 0.2;
+    cfg.tpose_s = 0.5;
+    cfg.motion_s = motion_s;
+    return synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, path.c_str(), nullptr) == MOCAP_OK;
+}
+
 struct SessionCloser {
     mocap_session *s = nullptr;
     ~SessionCloser() { mocap_session_close(s); }
@@ -606,15 +619,8 @@ TEST(Session, CalibrationQueueHoldsEightWaitingSteps)
 // only the wall-clock pace differs.
 TEST(Session, RealtimeReplayKeepsTheRecordedTimeline)
 {
-    synth_config cfg;
-    synth_config_defaults(&cfg);
-    cfg.seed = 25;
-    cfg.heading_s = 0.5;
-    cfg.strap_s = 0.2;
-    cfg.tpose_s = 0.5;
-    cfg.motion_s = 1.0;
     std::string capture = test_temp_path("paced.cap");
-    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    ASSERT_TRUE(write_short_walk(capture, 25, 1.0));
     std::vector<mocap_frame> runs[2];
     double wall[2];
     for (int paced = 0; paced < 2; ++paced) {
@@ -667,15 +673,8 @@ int find_open_descriptor(const std::string &path)
 TEST(Session, ReplayReadFailureEndsTheStreamWithTheCause)
 {
     if (!std::filesystem::exists("/proc/self/fd")) GTEST_SKIP() << "needs /proc/self/fd";
-    synth_config cfg;
-    synth_config_defaults(&cfg);
-    cfg.seed = 31;
-    cfg.heading_s = 0.5;
-    cfg.strap_s = 0.2;
-    cfg.tpose_s = 0.5;
-    cfg.motion_s = 6.0;
     std::string capture = test_temp_path("vanishing.cap");
-    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    ASSERT_TRUE(write_short_walk(capture, 31, 6.0));
     mocap_session_config config = replay_config(capture);
     config.replay_realtime = 1;
     config.replay_speed = 1.0f;
