@@ -98,8 +98,32 @@ def test_evaluate_end_to_end(tmp_path):
         assert r["latency"]["calls"] == 120 and r["latency"]["p50_us"] > 0
     text = (out / "evaluation.md").read_text()
     assert "| baseline |" in text and "<= 10 deg" in text and "<= 4 M" in text
+    if models:
+        assert "(the same model)" in text and "different models" not in text
     for png in ("per_joint_error.png", "error_over_time.png", "drift.png"):
         assert (out / png).stat().st_size > 1000
+
+
+def test_a_checkpoint_that_is_not_the_onnx_model_is_flagged(tmp_path, capsys):
+    if not ort.onnx_runtime_available():
+        pytest.skip("ONNX Runtime not available")
+    torch.manual_seed(0)
+    cfg = ModelConfig(embed=16, hidden=8, layers=1, head=16)
+    exported, other = PoseNet(cfg).eval(), PoseNet(cfg).eval()
+    _export(MirrorEnsemble(exported), tmp_path / "tiny_fp32.onnx", cfg.layers, 2 * cfg.hidden)
+    ckpt = tmp_path / "other.pt"
+    torch.save({"model": other.state_dict(), "config": cfg.to_dict()}, ckpt)
+    motions = [procedural.make_motion("walk", 3.0, seed=0)]
+    ev.evaluate(motions, [tmp_path / "tiny_fp32.onnx"], ckpt, tmp_path / "res", seed=1, latency=False)
+    assert "is not the model the ONNX fp32 file was exported from" in capsys.readouterr().out
+    text = (tmp_path / "res" / "evaluation.md").read_text()
+    assert "**different models**" in text and "other.pt" in text
+
+
+def test_default_checkpoint_is_never_a_running_jobs_last_pt():
+    assert not any(c.endswith("last.pt") for c in ev.CHECKPOINT_CANDIDATES)
+    assert ev.CHECKPOINT_CANDIDATES[-1] == "training/checkpoints/mocap_pose.pt"
+    assert (ev.REPO / ev.CHECKPOINT_CANDIDATES[-1]).is_file()
 
 
 def test_cli_on_a_bvh_folder(tmp_path, fixture_dir):
