@@ -24,6 +24,7 @@ import shutil
 import subprocess
 import sys
 import time
+from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -130,9 +131,13 @@ def list_clips(root, split=None, elbow: str = "repair") -> list:
             out.append((r["clip"], r["subject"], p, r.get("elbow_reversed", "").strip()
                         if elbow == "repair" else ""))
     else:
-        for p in sorted(root.rglob("*.bvh")):
+        paths = sorted(root.rglob("*.bvh"))
+        stems = Counter(p.stem for p in paths)
+        for p in paths:
             m = _CLIP_RE.match(p.stem)
-            out.append((p.stem, int(m.group(1)) if m else 0, p, ""))
+            # Clips are keyed by name: two "walk.bvh" in different folders keep their folders.
+            name = p.stem if stems[p.stem] == 1 else p.relative_to(root).with_suffix("").as_posix()
+            out.append((name, int(m.group(1)) if m else 0, p, ""))
     if split is not None:
         if split not in SPLITS:
             raise ValueError(f"split must be one of {SPLITS}")
@@ -153,7 +158,8 @@ def cache_path(clip: str, path: Path, elbow_reversed: str, cache_dir=None, versi
     st = Path(path).stat()
     key = f"{Path(path).resolve()}|{st.st_size}|{st.st_mtime_ns}|{elbow_reversed}"
     root = Path(CACHE_DIR if cache_dir is None else cache_dir)
-    return root / (version or code_version()) / f"{clip}-{hashlib.sha1(key.encode()).hexdigest()[:16]}.npz"
+    safe = clip.replace("/", "__")
+    return root / (version or code_version()) / f"{safe}-{hashlib.sha1(key.encode()).hexdigest()[:16]}.npz"
 
 
 def prune_cache(cache_dir=None) -> list:

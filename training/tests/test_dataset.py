@@ -99,6 +99,18 @@ def test_plain_folder_without_manifest(tmp_path, fixture_dir):
     assert [(m.name, m.subject) for m in ms] == [("02_01", 2), ("walk", 0)]
 
 
+def test_same_file_name_in_two_folders_is_two_clips(tmp_path, fixture_dir):
+    d, _ = fixture_dir
+    for sub, src in (("monday", "02_01"), ("tuesday", "03_01")):
+        (tmp_path / "clips" / sub).mkdir(parents=True)
+        (tmp_path / "clips" / sub / "walk.bvh").write_bytes((d / "bvh" / src[:2] / f"{src}.bvh").read_bytes())
+    for cache in (False, True):
+        ms = ds.load_motions(tmp_path / "clips", cache=cache, workers=1, progress=False,
+                             cache_dir=tmp_path / "cache")
+        assert [m.name for m in ms] == ["monday/walk", "tuesday/walk"]
+        assert not np.array_equal(ms[0].local_rot[:10], ms[1].local_rot[:10])
+
+
 def test_extract_and_prepare(fixture_dir, tmp_path, capsys):
     d, written = fixture_dir
     shared = tmp_path / "shared"
