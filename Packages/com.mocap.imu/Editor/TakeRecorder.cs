@@ -1,8 +1,9 @@
 // Records a driven avatar to an AnimationClip in the editor (UnityEditor.Animations.GameObjectRecorder:
 // every Transform under the root, one snapshot per frame), and the solved poses to a core PoseTake
 // so the take can be exported to BVH: every pose at the model's rate when the inspector feeds it
-// from MocapSessionComponent.PoseSolved, else the pose of each snapshot (PoseSource). Thin: naming, pose bookkeeping and BVH
-// live in the engine-free core (Recording/PoseTake.cs, BvhExporter.cs).
+// from MocapSessionComponent.PoseSolved, else the pose of each snapshot (PoseSource). Thin:
+// naming, pose bookkeeping and BVH live in the engine-free core (Recording/PoseTake.cs,
+// BvhExporter.cs).
 //
 // In Play Mode a snapshot is taken once per player frame after LateUpdate (a PlayerLoop system
 // appended to PostLateUpdate), so the clip sees exactly the pose the driver applied that frame.

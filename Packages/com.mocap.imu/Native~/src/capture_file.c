@@ -17,6 +17,7 @@
 
 #include "crc.h"
 #include "error.h"
+#include "platform.h"
 
 #if defined(_WIN32)
 #define WIN32_LEAN_AND_MEAN
@@ -81,10 +82,7 @@ static int file_open(const char *path, int writing)
 #if defined(_WIN32)
     /* Paths are UTF-8: the narrow _open would read them in the ANSI code page. */
     wchar_t wide[MOCAP_PATH_MAX];
-    if (MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, path, -1, wide, MOCAP_PATH_MAX) == 0) {
-        errno = EINVAL;
-        return -1;
-    }
+    if (mocap_utf8_to_wide(path, wide, MOCAP_PATH_MAX) != 0) return -1;
     if (writing)
         return _wopen(wide, _O_WRONLY | _O_CREAT | _O_TRUNC | _O_BINARY | _O_NOINHERIT,
                       _S_IREAD | _S_IWRITE);

@@ -175,7 +175,9 @@ mocap_status ort_generic_open(const char *path, int intra_op_threads, ort_generi
 #if defined(_WIN32)
     if (!st) {
         wchar_t wpath[1024];
-        MultiByteToWideChar(CP_UTF8, 0, path, -1, wpath, 1024);
+        /* The probe above already opened this path, so it converts; if not, ONNX Runtime
+         * reports the empty path as a missing file. */
+        if (mocap_utf8_to_wide(path, wpath, 1024) != 0) wpath[0] = L'\0';
         st = api->CreateSession(g->env, wpath, so, &g->session);
     }
 #else

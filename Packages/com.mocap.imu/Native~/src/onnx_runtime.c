@@ -772,7 +772,7 @@ mocap_status ort_model_open(const char *path, const ort_options *options, ort_mo
 #if defined(_WIN32)
     {
         wchar_t wpath[1024];
-        if (MultiByteToWideChar(CP_UTF8, 0, path, -1, wpath, 1024) == 0) {
+        if (mocap_utf8_to_wide(path, wpath, 1024) != 0) {
             r = mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "model %s: path not valid UTF-8", path);
             goto fail;
         }

@@ -77,6 +77,13 @@ int mocap_remove_file(const char *path);
  * 0 or an errno value. */
 int mocap_replace_file(const char *from, const char *to);
 
+#if defined(_WIN32)
+#include <wchar.h>
+/* A UTF-8 string as UTF-16 for Windows' wide calls: 0, or -1 with errno EINVAL (not UTF-8) or
+ * ENAMETOOLONG (more than cap units with the terminator). */
+int mocap_utf8_to_wide(const char *utf8, wchar_t *out, int cap);
+#endif
+
 #ifdef __cplusplus
 }
 #endif

@@ -157,7 +157,7 @@ void mocap_sleep_ms(int ms)
 
 #define WIDE_PATH_MAX 4096
 
-static int to_wide(const char *utf8, wchar_t *out, int cap)
+int mocap_utf8_to_wide(const char *utf8, wchar_t *out, int cap)
 {
     if (MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, utf8, -1, out, cap) > 0) return 0;
     errno = GetLastError() == ERROR_INSUFFICIENT_BUFFER ? ENAMETOOLONG : EINVAL;
@@ -167,21 +167,21 @@ static int to_wide(const char *utf8, wchar_t *out, int cap)
 FILE *mocap_fopen(const char *path, const char *mode)
 {
     wchar_t wpath[WIDE_PATH_MAX], wmode[16];
-    if (to_wide(path, wpath, WIDE_PATH_MAX) != 0 || to_wide(mode, wmode, 16) != 0) return NULL;
+    if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0 || mocap_utf8_to_wide(mode, wmode, 16) != 0) return NULL;
     return _wfopen(wpath, wmode);
 }
 
 int mocap_remove_file(const char *path)
 {
     wchar_t wpath[WIDE_PATH_MAX];
-    if (to_wide(path, wpath, WIDE_PATH_MAX) != 0) return -1;
+    if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0) return -1;
     return _wremove(wpath);
 }
 
 int mocap_replace_file(const char *from, const char *to)
 {
     wchar_t wfrom[WIDE_PATH_MAX], wto[WIDE_PATH_MAX];
-    if (to_wide(from, wfrom, WIDE_PATH_MAX) != 0 || to_wide(to, wto, WIDE_PATH_MAX) != 0) return errno;
+    if (mocap_utf8_to_wide(from, wfrom, WIDE_PATH_MAX) != 0 || mocap_utf8_to_wide(to, wto, WIDE_PATH_MAX) != 0) return errno;
     if (MoveFileExW(wfrom, wto, MOVEFILE_REPLACE_EXISTING | MOVEFILE_WRITE_THROUGH)) return 0;
     switch (GetLastError()) {
     case ERROR_ACCESS_DENIED:

@@ -253,16 +253,6 @@ static void publish_snapshots(mocap_session *s)
     mocap_mutex_unlock(s->lock);
 }
 
-/* After an API call changed what is waiting: before start() no thread would pick it up, so
- * publish here. started is read and written under the lock, so this never overlaps the
- * processing thread, which only exists once started is set. */
-static void publish_if_not_started(mocap_session *s)
-{
-    mocap_mutex_lock(s->lock);
-    if (!s->started) publish_snapshots_locked(s);
-    mocap_mutex_unlock(s->lock);
-}
-
 static void record_capture_error(mocap_session *s, mocap_status status)
 {
     char text[200]; /* leaves room for the prefix in async_error */
@@ -416,7 +406,7 @@ mocap_status mocap_session_start(mocap_session *s)
     if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session is NULL");
     mocap_mutex_lock(s->lock);
     int already = s->started;
-    s->started = 1; /* before the threads exist: see publish_if_not_started */
+    s->started = 1; /* before the threads exist: see mocap_calibration_schedule */
     mocap_mutex_unlock(s->lock);
     if (already) return mocap_fail(MOCAP_ERR_STATE, "session already started");
     const char *failed = NULL;
@@ -523,8 +513,11 @@ mocap_status mocap_calibration_schedule(mocap_session *s, int32_t step, double s
     }
     calibration_request r = {step, start_s, duration_s};
     s->pending[s->pending_count++] = r;
+    /* Before start() no thread would pick the request up, so publish it here. started is read
+     * and written under the lock, so this never overlaps the processing thread, which only
+     * exists once started is set. */
+    if (!s->started) publish_snapshots_locked(s);
     mocap_mutex_unlock(s->lock);
-    publish_if_not_started(s);
     return MOCAP_OK;
 }
 
@@ -587,8 +580,8 @@ mocap_status mocap_calibration_set(mocap_session *s, const mocap_calibration *ca
     mocap_mutex_lock(s->lock);
     s->calibration_to_set = *cal;
     s->calibration_set_pending = 1;
+    if (!s->started) publish_snapshots_locked(s); /* as in mocap_calibration_schedule */
     mocap_mutex_unlock(s->lock);
-    publish_if_not_started(s);
     return MOCAP_OK;
 }
 
