@@ -64,6 +64,9 @@ class Augmentation:
     drop_max_frames: int = 6         # drop-out length U{1..n} frames: the last sample is held
     mirror: float = 0.5              # probability that the clip is performed mirror-image
     speed: tuple = (0.8, 1.2)        # playback speed U(a, b): the same motion done faster or slower
+    # Motion variety (applied by the trainer's batcher through `vary_motion`, before synthesis):
+    arm_swap: float = 0.0            # probability that both arms move as in another clip
+    arm_jitter_deg: float = 0.0      # per-axis sigma of a slowly varying offset of each shoulder
 
 
 @dataclass
@@ -160,6 +163,57 @@ def _hold_drops(rng, x: np.ndarray, rate: float, max_len: int) -> np.ndarray:
             n = int(rng.integers(1, max_len + 1))
             x[t0:t0 + n, s] = x[t0 - 1, s]
     return x
+
+
+# ------------------------------------------------------------------------------ motion variety
+ARM_JOINTS = [13, 14, 16, 17, 18, 19, 20, 21, 22, 23]   # collars, shoulders, elbows, wrists, hands
+SHOULDER_JOINTS = [16, 17]
+
+
+def _smooth_offsets(rng, T: int, fps: float, sigma_deg: float, n: int) -> np.ndarray:
+    """(T,n,3,3): per joint a rotation that wanders slowly (two sinusoids per axis, 0.05-0.5 Hz,
+    random phase), per-axis standard deviation sigma_deg."""
+    t = np.arange(T) / fps
+    freq = rng.uniform(0.05, 0.5, size=(2, n, 3))
+    phase = rng.uniform(0, 2 * np.pi, size=(2, n, 3))
+    wave = np.sin(2 * np.pi * freq[:, None] * t[None, :, None, None] + phase[:, None]).sum(0)
+    return sk.axis_angle_to_rot(wave * np.deg2rad(sigma_deg))           # sum of 2 sines: std 1
+
+
+def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
+    """New arm movements on an existing clip (training only). The 6 h of CMU motion tie each arm
+    pose to the body motion it was captured with, and the network learns those pairings: its
+    error on the training subjects is far below that on new ones, mostly in the unobserved upper
+    arms. With probability `arm_swap` both arms (collars to hands) take their local rotations
+    from a random window of a donor clip; `arm_jitter_deg` adds a slow random rotation to each
+    shoulder. Legs, root and therefore contacts and root velocity are untouched; the sensors are
+    synthesised afterwards from the new pose, so signals and targets stay consistent."""
+    if not augment or (augment.arm_swap <= 0 and augment.arm_jitter_deg <= 0):
+        return motion
+    local = np.asarray(motion.local_rot)
+    root = np.asarray(motion.root_pos)
+    changed = False
+    if donors and augment.arm_swap > 0 and rng.random() < augment.arm_swap:
+        donor = donors[int(rng.integers(len(donors)))]
+        if donor is not motion and float(donor.fps) == float(motion.fps):
+            T = min(motion.num_frames, donor.num_frames)
+            a = int(rng.integers(0, motion.num_frames - T + 1))
+            b = int(rng.integers(0, donor.num_frames - T + 1))
+            local = local[a:a + T].copy()
+            root = root[a:a + T]
+            local[:, ARM_JOINTS] = np.asarray(donor.local_rot)[b:b + T, ARM_JOINTS]
+            changed = True
+    if augment.arm_jitter_deg > 0:
+        if not changed:
+            local = local.copy()
+        off = _smooth_offsets(rng, local.shape[0], float(motion.fps), augment.arm_jitter_deg,
+                              len(SHOULDER_JOINTS)).astype(local.dtype)
+        local[:, SHOULDER_JOINTS] = local[:, SHOULDER_JOINTS] @ off
+        changed = True
+    if not changed:
+        return motion
+    return sk.Motion(name=motion.name, subject=motion.subject, fps=motion.fps,
+                     local_rot=local, root_pos=root, offsets=motion.offsets)
 
 
 # ------------------------------------------------------------------------------ synthesis

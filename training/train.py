@@ -41,7 +41,7 @@ import torch.nn.functional as F
 
 from . import skeleton as sk
 from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch
-from .synthesis import Augmentation, synthesize
+from .synthesis import Augmentation, synthesize, vary_motion
 
 REPO = Path(__file__).resolve().parents[1]
 CKPT_DIR = REPO / "training" / "data" / "checkpoints"
@@ -67,6 +67,8 @@ class TrainConfig:
     w_vel: float = 1.0
     w_drift: float = 2.0
     w_contact: float = 0.5
+    arm_swap: float = 0.0             # Augmentation.arm_swap / arm_jitter_deg (motion variety)
+    arm_jitter_deg: float = 0.0
     rot_loss: str = "chordal"         # "chordal": Frobenius distance per joint (~ angle, like the
                                       # metric); "squared": its square (punishes outliers more)
     dropout: float | None = 0.1       # PoseNet dropout in training (None: the checkpoint's own)
@@ -135,6 +137,9 @@ class StreamBatcher:
     def _new(self, i: int) -> None:
         while True:   # a sped-up short clip can end up shorter than a window: draw again
             m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
+            m = vary_motion(m, self.rng, self.augment, self.motions)
+            if m.num_frames < self.window + 1:
+                continue
             s = synthesize(m, self.rng, self.augment)
             if s.num_frames >= self.window:
                 break
@@ -371,7 +376,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         net.set_dropout(cfg.dropout)
     if cfg.anchored:
         net.enable_anchoring()
-    batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng)
+    batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng,
+                            Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg))
     val = validation_set(val_motions or [], cfg) if val_motions else []
     steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
     print(f"train: {len(batcher.motions)} clips, {batcher.total_frames} frames "
@@ -471,7 +477,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
 def main(args) -> int:
     cfg = TrainConfig()
     for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
-              "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss"):
+              "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
+              "arm_jitter_deg", "ckpt_dir", "results_dir"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -513,6 +520,14 @@ def add_arguments(parser) -> None:
                         help="predict the sensor bones like every other joint (runs 1-2)")
     parser.add_argument("--rot-loss", dest="rot_loss", default=None, choices=["chordal", "squared"],
                         help="rotation loss (default chordal)")
+    parser.add_argument("--arm-swap", dest="arm_swap", type=float, default=None,
+                        help="probability that a clip's arms move as in another clip (default 0)")
+    parser.add_argument("--arm-jitter", dest="arm_jitter_deg", type=float, default=None,
+                        help="slow random shoulder offsets, per-axis sigma in degrees (default 0)")
+    parser.add_argument("--ckpt-dir", dest="ckpt_dir", default=None,
+                        help="checkpoint folder (default training/data/checkpoints)")
+    parser.add_argument("--results-dir", dest="results_dir", default=None,
+                        help="loss curve and log folder (default training/results)")
     parser.add_argument("--max-clips", dest="max_clips", type=int, default=None)
     parser.add_argument("--bvh", default=None, help="train on a BVH folder instead of the CMU split")
     parser.add_argument("--val-bvh", dest="val_bvh", default=None)

@@ -192,3 +192,50 @@ def test_evaluation_inputs_keep_the_clip_timing():
     s = sy.synthesize(m, np.random.default_rng(1), eval_augmentation())
     assert s.num_frames == m.num_frames
     assert np.allclose(s.local_rot, m.local_rot, atol=1e-6)
+
+
+def _two_clips():
+    walk = procedural.make_motion("walk", seconds=4.0, seed=1, name="walk")
+    arms = procedural.make_motion("arm_swing", seconds=3.0, seed=2, name="arms")
+    return walk, arms
+
+
+def test_arm_swap_takes_the_donors_arms_and_keeps_the_rest():
+    walk, arms = _two_clips()
+    aug = sy.Augmentation(arm_swap=1.0)
+    v = sy.vary_motion(walk, np.random.default_rng(3), aug, [arms])
+    T = v.num_frames
+    assert T == arms.num_frames < walk.num_frames          # cropped to the shorter donor
+    # the crop is a window of the original: find its start from the root track
+    start = int(np.argmin([np.abs(walk.root_pos[a:a + T] - v.root_pos).max()
+                           for a in range(walk.num_frames - T + 1)]))
+    assert np.array_equal(v.root_pos, walk.root_pos[start:start + T])
+    body = [j for j in range(24) if j not in sy.ARM_JOINTS]
+    assert np.array_equal(v.local_rot[:, body], walk.local_rot[start:start + T, body])
+    assert np.array_equal(v.local_rot[:, sy.ARM_JOINTS], arms.local_rot[:, sy.ARM_JOINTS])
+    # the sensors follow the new arms: the wrists move as the donor's arms on the walker's body
+    s = sy.synthesize(v)
+    w = sy.synthesize(sk.Motion("w", 0, walk.fps, walk.local_rot[start:start + T],
+                                walk.root_pos[start:start + T], walk.offsets))
+    assert np.abs(s.imu_orientation[:, 1:3] - w.imu_orientation[:, 1:3]).max() > 0.1
+    assert np.allclose(s.imu_orientation[:, [0, 3, 4, 5]], w.imu_orientation[:, [0, 3, 4, 5]], atol=1e-6)
+    assert np.array_equal(s.foot_contact, w.foot_contact)
+
+
+def test_arm_jitter_turns_only_the_shoulders_slowly_by_about_sigma():
+    walk, _ = _two_clips()
+    aug = sy.Augmentation(arm_jitter_deg=8.0)
+    v = sy.vary_motion(walk, np.random.default_rng(4), aug)
+    rel = np.swapaxes(walk.local_rot, -1, -2) @ v.local_rot
+    ang = np.rad2deg(np.linalg.norm(sk.rot_to_axis_angle(rel), axis=-1))      # (T,24)
+    others = [j for j in range(24) if j not in sy.SHOULDER_JOINTS]
+    assert ang[:, others].max() < 1e-3
+    assert 3.0 < ang[:, sy.SHOULDER_JOINTS].mean() < 25.0
+    assert np.abs(np.diff(ang[:, sy.SHOULDER_JOINTS], axis=0)).max() < 1.0    # slow: < 1 deg/frame
+
+
+def test_motion_variety_is_off_by_default_and_for_evaluation():
+    walk, arms = _two_clips()
+    rng = np.random.default_rng(5)
+    assert sy.vary_motion(walk, rng, sy.Augmentation(), [arms]) is walk
+    assert sy.vary_motion(walk, rng, None, [arms]) is walk
