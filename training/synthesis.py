@@ -188,32 +188,28 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
     from a random window of a donor clip; `arm_jitter_deg` adds a slow random rotation to each
     shoulder. Legs, root and therefore contacts and root velocity are untouched; the sensors are
     synthesised afterwards from the new pose, so signals and targets stay consistent."""
-    if not augment or (augment.arm_swap <= 0 and augment.arm_jitter_deg <= 0):
+    if not augment:
         return motion
-    local = np.asarray(motion.local_rot)
-    root = np.asarray(motion.root_pos)
-    changed = False
+    donor = None
     if donors and augment.arm_swap > 0 and rng.random() < augment.arm_swap:
-        donor = donors[int(rng.integers(len(donors)))]
-        if donor is not motion and float(donor.fps) == float(motion.fps):
-            T = min(motion.num_frames, donor.num_frames)
-            a = int(rng.integers(0, motion.num_frames - T + 1))
-            b = int(rng.integers(0, donor.num_frames - T + 1))
-            local = local[a:a + T].copy()
-            root = root[a:a + T]
-            local[:, ARM_JOINTS] = np.asarray(donor.local_rot)[b:b + T, ARM_JOINTS]
-            changed = True
+        d = donors[int(rng.integers(len(donors)))]
+        if d is not motion and float(d.fps) == float(motion.fps):
+            donor = d
+    if donor is None and augment.arm_jitter_deg <= 0:
+        return motion
+    T = motion.num_frames if donor is None else min(motion.num_frames, donor.num_frames)
+    a = int(rng.integers(0, motion.num_frames - T + 1))
+    local = np.array(motion.local_rot[a:a + T])                   # a copy: the clip is shared
+    if donor is not None:
+        b = int(rng.integers(0, donor.num_frames - T + 1))
+        local[:, ARM_JOINTS] = np.asarray(donor.local_rot)[b:b + T, ARM_JOINTS]
     if augment.arm_jitter_deg > 0:
-        if not changed:
-            local = local.copy()
-        off = _smooth_offsets(rng, local.shape[0], float(motion.fps), augment.arm_jitter_deg,
+        off = _smooth_offsets(rng, T, float(motion.fps), augment.arm_jitter_deg,
                               len(SHOULDER_JOINTS)).astype(local.dtype)
         local[:, SHOULDER_JOINTS] = local[:, SHOULDER_JOINTS] @ off
-        changed = True
-    if not changed:
-        return motion
     return sk.Motion(name=motion.name, subject=motion.subject, fps=motion.fps,
-                     local_rot=local, root_pos=root, offsets=motion.offsets)
+                     local_rot=local, root_pos=np.asarray(motion.root_pos)[a:a + T],
+                     offsets=motion.offsets)
 
 
 # ------------------------------------------------------------------------------ synthesis

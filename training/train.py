@@ -137,9 +137,7 @@ class StreamBatcher:
     def _new(self, i: int) -> None:
         while True:   # a sped-up short clip can end up shorter than a window: draw again
             m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
-            m = vary_motion(m, self.rng, self.augment, self.motions)
-            if m.num_frames < self.window + 1:
-                continue
+            m = vary_motion(m, self.rng, self.augment, self.motions)   # donors are >= a window too
             s = synthesize(m, self.rng, self.augment)
             if s.num_frames >= self.window:
                 break
