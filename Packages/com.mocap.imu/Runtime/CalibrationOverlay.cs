@@ -1,3 +1,4 @@
+using System;
 using UnityEngine;
 
 namespace Mocap.Imu
@@ -37,7 +38,10 @@ namespace Mocap.Imu
         readonly CharacterTarget _target = new CharacterTarget();
         readonly CalibrationFlowSettings _settings = new CalibrationFlowSettings();
         CalibrationFlow _flow;
-        static readonly string[] SegmentNames = { "pelvis", "left wrist", "right wrist", "left shin", "right shin", "head" };
+        // OnGUI runs every frame: strings are rebuilt only when what they show changes.
+        readonly CalibrationReportLines _sensorLines = new CalibrationReportLines();
+        string _title, _titleName, _collecting, _recording, _recordingPath;
+        int _collectingPercent = -1;
 
         /// <summary>The guided flow (phase, step, countdown, refusal reason).</summary>
         public CalibrationFlow Flow => _flow ??= new CalibrationFlow(_target, _settings);
@@ -74,7 +78,7 @@ namespace Mocap.Imu
         {
             if (!visible) return;
             GUILayout.BeginArea(area, GUI.skin.box);
-            GUILayout.Label($"Mocap IMU - {(session != null ? session.GetCharacterName(character) : "no session")}");
+            GUILayout.Label(Title());
             if (session == null || session.Status != MocapComponentStatus.Running)
             {
                 GUILayout.Label(session == null ? "Assign a MocapSessionComponent."
@@ -89,18 +93,16 @@ namespace Mocap.Imu
             CalibrationReport report = default;
             bool hasReport = flow.TryGetReport(out report);
             if (flow.Phase == CalibrationFlowPhase.Collecting)
-                GUILayout.Label($"Collecting: {flow.Progress * 100f:F0}%");
+                GUILayout.Label(Collecting(flow.Progress));
 
             // Per sensor: stillness (gyro RMS) and orientation spread over the window.
             if (hasReport && report.State != CalibrationState.Idle)
             {
                 for (int s = 0; s < MocapSession.SensorCount; s++)
                 {
-                    var q = report.GetSensor((MocapSegment)s);
                     var color = GUI.color;
-                    if (report.IsFinished) GUI.color = q.IsOk ? Color.green : Color.red;
-                    GUILayout.Label($"{SegmentNames[s],-12} gyro {q.GyroRmsDps,5:F1} deg/s  spread {q.OrientationSpreadDegrees,4:F1} deg  " +
-                                    $"|g| err {q.AccelerationNormError,4:F2}  {q.Samples} samples{(report.IsFinished ? (q.IsOk ? "  ok" : "  BAD") : "")}");
+                    if (report.IsFinished) GUI.color = report.GetSensor((MocapSegment)s).IsOk ? Color.green : Color.red;
+                    GUILayout.Label(_sensorLines.GetLine(report, (MocapSegment)s));
                     GUI.color = color;
                 }
             }
@@ -125,8 +127,40 @@ namespace Mocap.Imu
                 else session.StartRecording();
             }
             GUILayout.EndHorizontal();
-            if (session.IsRecording) GUILayout.Label("Recording to " + session.GetRecordingPath(character));
+            if (session.IsRecording) GUILayout.Label(Recording(session.GetRecordingPath(character)));
             GUILayout.EndArea();
+        }
+
+        string Title()
+        {
+            string name = session != null ? session.GetCharacterName(character) : "no session";
+            if (_title == null || name != _titleName)
+            {
+                _titleName = name;
+                _title = "Mocap IMU - " + name;
+            }
+            return _title;
+        }
+
+        string Collecting(float progress)
+        {
+            int percent = (int)Math.Round(progress * 100f);
+            if (percent != _collectingPercent)
+            {
+                _collectingPercent = percent;
+                _collecting = $"Collecting: {percent}%";
+            }
+            return _collecting;
+        }
+
+        string Recording(string path)
+        {
+            if (_recording == null || path != _recordingPath)
+            {
+                _recordingPath = path;
+                _recording = "Recording to " + path;
+            }
+            return _recording;
         }
     }
 }

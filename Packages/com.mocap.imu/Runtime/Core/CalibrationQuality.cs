@@ -136,3 +136,50 @@ namespace Mocap.Imu
         static string Format(string format, float a, float b) => string.Format(Invariant, format, a, b);
     }
 }
+
+namespace Mocap.Imu
+{
+    /// <summary>
+    /// One display line per sensor of a calibration report ("left wrist: ok - gyro 0.4/10 deg/s,
+    /// ..."), kept until the numbers it shows change. A run-time overlay redraws every frame;
+    /// with this it builds strings only while a step is collecting, not while a result sits on
+    /// screen.
+    /// </summary>
+    public sealed class CalibrationReportLines
+    {
+        struct Shown
+        {
+            public string Line;
+            public CalibrationStep Step;
+            public bool Finished;
+            public SensorQuality Quality;
+        }
+
+        readonly Shown[] _shown = new Shown[MocapSession.SensorCount];
+
+        /// <summary>The line for one sensor of <paramref name="report"/>.</summary>
+        public string GetLine(in CalibrationReport report, MocapSegment segment)
+        {
+            var quality = report.GetSensor(segment);       // checks the range
+            ref var shown = ref _shown[(int)segment];
+            if (shown.Line != null && shown.Step == report.Step && shown.Finished == report.IsFinished
+                && SameNumbers(shown.Quality, quality))
+                return shown.Line;
+            var summary = CalibrationQuality.Summarize(report.Step, segment, quality);
+            string verdict = report.IsFinished ? (quality.IsOk ? ": ok" : ": REFUSED") : "";
+            shown.Line = CalibrationQuality.SensorName(segment) + verdict + " - " + summary.Text;
+            shown.Step = report.Step;
+            shown.Finished = report.IsFinished;
+            shown.Quality = quality;
+            return shown.Line;
+        }
+
+        static bool SameNumbers(in SensorQuality a, in SensorQuality b) =>
+            Same(a.GyroRmsDps, b.GyroRmsDps) && Same(a.OrientationSpreadDegrees, b.OrientationSpreadDegrees)
+            && Same(a.AccelerationNormError, b.AccelerationNormError) && Same(a.TiltDegrees, b.TiltDegrees)
+            && a.Samples == b.Samples && a.IsOk == b.IsOk;
+
+        // NaN (a sensor the engine could not measure) shows as NaN each time: equal for display.
+        static bool Same(float a, float b) => a == b || (float.IsNaN(a) && float.IsNaN(b));
+    }
+}

@@ -229,6 +229,34 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual("left wrist", CalibrationQuality.SensorName(MocapSegment.LeftWrist));
         }
 
+        [Test]
+        public void ReportLinesAreKeptUntilTheNumbersTheyShowChange()
+        {
+            var lines = new CalibrationReportLines();
+            var collecting = Fake.Report(CalibrationStep.TPose, CalibrationState.Collecting, gyro: 0.5f, samples: 40);
+            string first = lines.GetLine(collecting, MocapSegment.RightShin);
+            Assert.AreEqual("right shin - gyro 0.5/10 deg/s, spread 0.2/3 deg, |a|-g 0.05/1.5 m/s2, 40 samples", first);
+            Assert.AreSame(first, lines.GetLine(collecting, MocapSegment.RightShin), "an unchanged sensor reuses its string");
+
+            var more = Fake.Report(CalibrationStep.TPose, CalibrationState.Collecting, gyro: 0.5f, samples: 41);
+            StringAssert.EndsWith("41 samples", lines.GetLine(more, MocapSegment.RightShin));
+            var refused = Fake.Report(CalibrationStep.TPose, CalibrationState.Refused, "x", gyro: 30.2f, samples: 41, ok: false);
+            string verdict = lines.GetLine(refused, MocapSegment.RightShin);
+            StringAssert.StartsWith("right shin: REFUSED - gyro 30.2/10 deg/s", verdict);
+            Assert.AreSame(verdict, lines.GetLine(refused, MocapSegment.RightShin));
+            StringAssert.StartsWith("head: REFUSED", lines.GetLine(refused, MocapSegment.Head), "each sensor has its own line");
+
+            var accepted = Fake.Report(CalibrationStep.TPose, CalibrationState.Accepted, gyro: 30.2f, samples: 41, ok: true);
+            StringAssert.StartsWith("right shin: ok", lines.GetLine(accepted, MocapSegment.RightShin), "the verdict is part of what is shown");
+            var heading = Fake.Report(CalibrationStep.Heading, CalibrationState.Accepted, gyro: 30.2f, samples: 41, ok: true);
+            StringAssert.Contains("tilt 2/30 deg", lines.GetLine(heading, MocapSegment.RightShin), "the step decides which checks are shown");
+
+            var unmeasured = Fake.Report(CalibrationStep.TPose, CalibrationState.Collecting, gyro: float.NaN, samples: 41);
+            string nan = lines.GetLine(unmeasured, MocapSegment.RightShin);
+            Assert.AreSame(nan, lines.GetLine(unmeasured, MocapSegment.RightShin), "NaN shows the same each frame");
+            Assert.Throws<ArgumentOutOfRangeException>(() => lines.GetLine(collecting, (MocapSegment)6));
+        }
+
         // ---- against the engine, paced replays ----------------------------------------------
 
         /// <summary>Runs the flow on a paced replay; the flow's clock is the replay's (wall time x speed).</summary>
