@@ -1,4 +1,4 @@
-"""python3 -m training <command>: prepare | train | export | evaluate | synth-capture | tip-model.
+"""python3 -m training <command>: prepare | train | average | export | evaluate | synth-capture | tip-model.
 
 Each subcommand imports its module lazily, so --help works while a module is missing."""
 from __future__ import annotations
@@ -10,6 +10,7 @@ import sys
 COMMANDS = {
     "prepare": ("dataset", "extract the CMU archives and convert every clip into the cache"),
     "train": ("train", "train the pose model (checkpoints in training/data/checkpoints)"),
+    "average": ("average", "average the weights of checkpoints of one network (model soup)"),
     "export": ("export", "export ONNX fp32 + fp16 per docs/model-contract.md"),
     "evaluate": ("evaluate", "metrics of PyTorch / ONNX models on held-out clips"),
     "synth-capture": ("synth_capture", "BVH clip -> raw HiPNUC capture via mocapctl synth"),

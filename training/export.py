@@ -216,7 +216,8 @@ def main(args) -> int:
     else:
         ckpt = Path(getattr(args, "checkpoint", None) or DEFAULT_CHECKPOINT)
         if not ckpt.is_file():
-            print(f"export: no checkpoint at {ckpt} (train first, or pass --untrained)")
+            print(f"export: no checkpoint at {ckpt} (train first; re-export the shipped weights with "
+                  f"--checkpoint training/checkpoints/mocap_pose.pt; or pass --untrained)")
             return 2
         net, ck = load_checkpoint(ckpt)
         name = f"mocap-pose lstm{net.state_layers}x{net.state_size}"
