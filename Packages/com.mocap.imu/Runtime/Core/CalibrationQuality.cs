@@ -1,6 +1,7 @@
 // Per-sensor calibration quality for people: each number of a SensorQuality against the engine's
 // acceptance limit (Native~/docs/calibration.md, "Acceptance checks"), a 0..1 stillness score for
-// a bar, and the checks that failed. The Calibration window draws these; no Unity here.
+// a bar, and the checks that failed. The Calibration window and the run-time overlay draw these;
+// no Unity here.
 
 using System;
 using System.Collections.Generic;
@@ -135,10 +136,7 @@ namespace Mocap.Imu
 
         static string Format(string format, float a, float b) => string.Format(Invariant, format, a, b);
     }
-}
 
-namespace Mocap.Imu
-{
     /// <summary>
     /// One display line per sensor of a calibration report ("left wrist: ok - gyro 0.4/10 deg/s,
     /// ..."), kept until the numbers it shows change. A run-time overlay redraws every frame;
