@@ -81,12 +81,22 @@ if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
       [ "$target" = hipnuc_decoder ] || seconds=$((FUZZ_SECONDS / 2 > 0 ? FUZZ_SECONDS / 2 : 1))
       corpus="$fuzz_dir/corpus/$target"; mkdir -p "$corpus"
       log="$fuzz_dir.$target.run.log"
+      artifacts="$fuzz_dir/artifacts/$target"; rm -rf "$artifacts"; mkdir -p "$artifacts"
       if (cd "$fuzz_dir" && "./fuzz/fuzz_$target" -max_total_time="$seconds" \
-            -print_final_stats=1 "$corpus" "$NATIVE/fuzz/corpus/$target") >"$log" 2>&1; then
+            -print_final_stats=1 -artifact_prefix="$artifacts/" \
+            "$corpus" "$NATIVE/fuzz/corpus/$target") >"$log" 2>&1; then
         echo "  $target: $(grep -oE "number_of_executed_units: [0-9]+" "$log" || true)"
         record "fuzz ($target)" 1 0
       else
-        tail -40 "$log"; record "fuzz ($target)" 0 1
+        tail -40 "$log"
+        # A CI machine's files are gone after the run: print the failing input so it can be
+        # rebuilt (base64 -d > input) and replayed with ./fuzz/fuzz_$target input.
+        for input in "$artifacts"/*; do
+          [ -f "$input" ] || continue
+          echo "--- failing input $(basename "$input") ($(wc -c <"$input") bytes), base64:"
+          head -c 8192 "$input" | base64
+        done
+        record "fuzz ($target)" 0 1
       fi
     done
   else

@@ -472,11 +472,12 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     return summary
 
 
-def main(args) -> int:
+def config_from_args(args) -> TrainConfig:
+    """The TrainConfig a parsed command line asks for (unset options keep the defaults)."""
     cfg = TrainConfig()
     for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
-              "arm_jitter_deg", "ckpt_dir", "results_dir"):
+              "arm_jitter_deg", "w_pos", "ckpt_dir", "results_dir"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -495,7 +496,11 @@ def main(args) -> int:
             cfg.steps = 30
         cfg.ckpt_dir = str(REPO / "training" / "data" / "smoke" / "checkpoints")
         cfg.results_dir = str(REPO / "training" / "data" / "smoke" / "results")
-    train(cfg)
+    return cfg
+
+
+def main(args) -> int:
+    train(config_from_args(args))
     return 0
 
 
@@ -522,6 +527,9 @@ def add_arguments(parser) -> None:
                         help="probability that a clip's arms move as in another clip (default 0)")
     parser.add_argument("--arm-jitter", dest="arm_jitter_deg", type=float, default=None,
                         help="slow random shoulder offsets, per-axis sigma in degrees (default 0)")
+    parser.add_argument("--pos-weight", dest="w_pos", type=float, default=None,
+                        help="weight of the joint-position loss (metres) against the rotation "
+                             "loss (default 10)")
     parser.add_argument("--ckpt-dir", dest="ckpt_dir", default=None,
                         help="checkpoint folder (default training/data/checkpoints)")
     parser.add_argument("--results-dir", dest="results_dir", default=None,

@@ -69,6 +69,18 @@ def test_weights_only_checkpoint_warm_starts_a_new_run(tmp_path):
     assert s2["steps"] == 2   # its own schedule, not the source run's
 
 
+def test_command_line_options_reach_the_training_config():
+    import argparse
+    parser = argparse.ArgumentParser()
+    tr.add_arguments(parser)
+    cfg = tr.config_from_args(parser.parse_args(
+        ["--pos-weight", "30", "--arm-swap", "0.5", "--arm-jitter", "12", "--lr", "2.5e-4", "--seed", "3"]))
+    assert (cfg.w_pos, cfg.arm_swap, cfg.arm_jitter_deg, cfg.lr, cfg.seed) == (30.0, 0.5, 12.0, 2.5e-4, 3)
+    default = tr.config_from_args(parser.parse_args([]))
+    assert default == tr.TrainConfig()
+    assert tr.config_from_args(parser.parse_args(["--no-anchor"])).anchored is False
+
+
 def test_stream_batcher_carries_state_and_resets_on_new_clips():
     rng = np.random.default_rng(0)
     b = tr.StreamBatcher(_motions(2, 0), batch=3, window=30, rng=rng)

@@ -4,6 +4,7 @@
 #include "calibration.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -660,14 +661,16 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
     return MOCAP_OK;
 }
 
-/* Parses exactly count finite numbers from s; anything left over is an error. */
+/* Parses exactly count finite numbers from s; anything left over is an error. The values are
+ * stored as floats, so a finite double beyond float range counts as not finite: it would turn
+ * into infinity, which calib_save (rightly) refuses to write back. */
 static int parse_numbers(const char *s, double *out, int count)
 {
     for (int i = 0; i < count; i++) {
         char *end;
         errno = 0;
         double v = strtod(s, &end);
-        if (end == s || !isfinite(v))
+        if (end == s || !isfinite(v) || fabs(v) > FLT_MAX)
             return 0;
         out[i] = v;
         s = end;

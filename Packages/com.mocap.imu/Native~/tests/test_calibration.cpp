@@ -775,6 +775,10 @@ TEST(CalibrationFile, CorruptFilesRejectedWithLineNumbers)
     cases.push_back({t, "line " + std::to_string(ln), "9 finite numbers"});
     t = replace_line(good, "pelvis.world_to_model", "pelvis.world_to_model 1 0 0 0 1 0 0 0", &ln);
     cases.push_back({t, "line " + std::to_string(ln), "9 finite numbers"});
+    // Finite as a double, infinite as the float it is stored in (found by the fuzzer).
+    t = replace_line(good, "right_wrist.acceleration_offset",
+                     "right_wrist.acceleration_offset -7.7e39 9.8 0", &ln);
+    cases.push_back({t, "line " + std::to_string(ln), "3 finite numbers"});
     t = replace_line(good, "valid_mask", "valid_mask 64", &ln);
     cases.push_back({t, "line " + std::to_string(ln), "valid_mask"});
     t = replace_line(good, "heading_mask", "heading_mask 63\nwhatever 1", &ln);
