@@ -115,8 +115,15 @@ namespace Mocap.Imu.Capture
             return value;
         }
 
-        static float Number(string text, string path, int lineNumber) =>
-            (float)Double(text, path, lineNumber);
+        static float Number(string text, string path, int lineNumber)
+        {
+            // Finite as a double is not enough: 1e39 becomes float infinity.
+            float value = (float)Double(text, path, lineNumber);
+            if (!float.IsFinite(value))
+                throw new MocapException(MocapStatus.Format,
+                    $"frame recording {path}:{lineNumber}: '{text}' is beyond float range");
+            return value;
+        }
 
         static double Double(string text, string path, int lineNumber)
         {

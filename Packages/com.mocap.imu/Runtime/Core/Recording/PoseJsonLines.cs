@@ -92,8 +92,8 @@ namespace Mocap.Imu.Recording
             pose.RootPosition = Vector(Array(o, "root_position", 3), "root_position");
             pose.RootVelocity = Vector(Array(o, "root_velocity", 3), "root_velocity");
             var contact = Array(o, "foot_contact", 2);
-            pose.LeftFootContact = (float)Element(contact, 0, "foot_contact");
-            pose.RightFootContact = (float)Element(contact, 1, "foot_contact");
+            pose.LeftFootContact = Element(contact, 0, "foot_contact");
+            pose.RightFootContact = Element(contact, 1, "foot_contact");
             var rotations = Array(o, "joint_rotations", MocapPose.JointCount);
             var positions = Array(o, "joint_positions", MocapPose.JointCount);
             for (int j = 0; j < MocapPose.JointCount; j++)
@@ -101,8 +101,8 @@ namespace Mocap.Imu.Recording
                 string where = $"joint_rotations[{j}]";
                 if (!(rotations[j] is List<object> q) || q.Count != 4)
                     throw new FormatException($"{where} is not an array of 4 numbers (w, x, y, z)");
-                pose.SetJointRotation(j, Quat.FromWxyz((float)Element(q, 0, where), (float)Element(q, 1, where),
-                                                       (float)Element(q, 2, where), (float)Element(q, 3, where)));
+                pose.SetJointRotation(j, Quat.FromWxyz(Element(q, 0, where), Element(q, 1, where),
+                                                       Element(q, 2, where), Element(q, 3, where)));
                 where = $"joint_positions[{j}]";
                 if (!(positions[j] is List<object> v) || v.Count != 3)
                     throw new FormatException($"{where} is not an array of 3 numbers");
@@ -114,6 +114,7 @@ namespace Mocap.Imu.Recording
         {
             if (!o.TryGetValue(key, out var value)) throw new FormatException($"\"{key}\" is missing");
             if (!(value is double d)) throw new FormatException($"\"{key}\" is not a number");
+            if (double.IsInfinity(d)) throw new FormatException($"\"{key}\" is not a finite number");
             return d;
         }
 
@@ -133,14 +134,17 @@ namespace Mocap.Imu.Recording
             return list;
         }
 
-        static double Element(List<object> list, int i, string where)
+        // Pose values are floats: a number beyond float range (1e39, 1e999) would become infinity.
+        static float Element(List<object> list, int i, string where)
         {
             if (!(list[i] is double d)) throw new FormatException($"{where} item {i} is not a number");
-            return d;
+            float f = (float)d;
+            if (!float.IsFinite(f)) throw new FormatException($"{where} item {i} ({d}) is not a finite float");
+            return f;
         }
 
         static Vec3 Vector(List<object> list, string where) =>
-            new Vec3((float)Element(list, 0, where), (float)Element(list, 1, where), (float)Element(list, 2, where));
+            new Vec3(Element(list, 0, where), Element(list, 1, where), Element(list, 2, where));
 
         /// <summary>
         /// A minimal JSON reader for one line: objects, arrays, numbers, strings, true/false/null.

@@ -115,7 +115,28 @@ namespace Mocap.Imu.Recording
             // Records are mocap_pose's bytes: read them straight into the array.
             var bytes = MemoryMarshal.AsBytes(poses.AsSpan());
             if (ReadFully(stream, bytes) != bytes.Length) throw Bad(path, "the file shrank while being read");
+            for (int i = 0; i < poses.Length; i++)
+            {
+                string field = FirstNonFinite(poses[i]);
+                if (field != null) throw Bad(path, $"pose {i}: {field} is not finite (a damaged file?)");
+            }
             return new PoseRecording(frameRate, skeleton, poses, contract);
+        }
+
+        // The engine never writes NaN or infinity; a pose holding one comes from damage, and would
+        // reach Unity transforms (which reject it) or exported files.
+        static string FirstNonFinite(in MocapPose pose)
+        {
+            if (!double.IsFinite(pose.TimeSeconds)) return "time";
+            if (!pose.RootPosition.IsFinite) return "root position";
+            if (!pose.RootVelocity.IsFinite) return "root velocity";
+            if (!float.IsFinite(pose.LeftFootContact) || !float.IsFinite(pose.RightFootContact)) return "foot contact";
+            for (int j = 0; j < MocapPose.JointCount; j++)
+            {
+                if (!pose.GetJointRotation(j).IsFinite) return $"joint {j} rotation";
+                if (!pose.GetJointPosition(j).IsFinite) return $"joint {j} position";
+            }
+            return null;
         }
 
         static float ReadFloat(byte[] b, int offset) =>

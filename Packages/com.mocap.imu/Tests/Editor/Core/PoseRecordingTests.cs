@@ -5,6 +5,7 @@ using System;
 using System.IO;
 using System.Linq;
 using System.Runtime.InteropServices;
+using System.Text.RegularExpressions;
 using Mocap.Imu.Maths;
 using Mocap.Imu.Recording;
 using Mocap.Imu.Skeleton;
@@ -158,6 +159,11 @@ Frame Time: 0.04
             AssertFormat(() => PoseJsonLines.Load(broken), "line 1", "\"time_s\" is missing");
             File.WriteAllLines(broken, new[] { lines[0].Replace("\"joint_positions\":[[", "\"joint_positions\":[[1,") });
             AssertFormat(() => PoseJsonLines.Load(broken), "joint_positions[0]");
+            // Numbers JSON allows but a float cannot hold are refused, not read as infinity.
+            File.WriteAllLines(broken, new[] { Regex.Replace(lines[0], "\"joint_positions\":\\[\\[[^,]+", "\"joint_positions\":[[1e39") });
+            AssertFormat(() => PoseJsonLines.Load(broken), "line 1", "joint_positions[0] item 0", "not a finite float");
+            File.WriteAllLines(broken, new[] { Regex.Replace(lines[0], "\"time_s\":[^,]+", "\"time_s\":1e999") });
+            AssertFormat(() => PoseJsonLines.Load(broken), "line 1", "\"time_s\" is not a finite number");
         }
 
         [Test]
@@ -229,6 +235,16 @@ Frame Time: 0.04
             bad = (byte[])bytes.Clone();
             BitConverter.GetBytes(float.NaN).CopyTo(bad, 20);
             AssertFormat(() => PoseRecording.Load(Write(dir, "rate", bad)), "frame rate");
+            // A damaged pose (NaN where the engine never writes one) is named, not handed on.
+            var damaged = _json.AsSpan(0, 3).ToArray();
+            damaged[1].SetJointPosition(7, new Vec3(float.NaN, 0f, 0f));
+            var damagedPath = Path.Combine(dir, "damaged.mcpose");
+            new PoseRecording(_model.Info.FrameRate, _model.Info.Skeleton, damaged).Save(damagedPath);
+            AssertFormat(() => PoseRecording.Load(damagedPath), "pose 1: joint 7 position is not finite");
+            damaged = _json.AsSpan(0, 3).ToArray();
+            damaged[2].SetJointRotation(0, new Quat(0f, float.PositiveInfinity, 0f, 1f));
+            new PoseRecording(_model.Info.FrameRate, _model.Info.Skeleton, damaged).Save(damagedPath);
+            AssertFormat(() => PoseRecording.Load(damagedPath), "pose 2: joint 0 rotation is not finite");
             var e = Assert.Throws<MocapException>(() => PoseRecording.Load(Path.Combine(dir, "none.mcpose")));
             Assert.AreEqual(MocapStatus.NotFound, e.Status);
         }

@@ -357,6 +357,25 @@ namespace Mocap.Imu.Tests
             StringAssert.Contains(bad, e.Message);
         }
 
+        [TestCase(3, "1e39", "beyond float range")]      // finite as a double, infinite as a float
+        [TestCase(7, "nan", "not a finite number")]
+        [TestCase(1, "-inf", "not a finite number")]
+        public void FrameRecordingRefusesNumbersThatAreNotFiniteFloats(int column, string bad, string expected)
+        {
+            var path = Path.Combine(TestPaths.NewTempDirectory("nonfinite"), "frames.csv");
+            FrameRecording.Save(path, _run.Frames.ToArray());
+            var lines = File.ReadAllLines(path);
+            int row = Array.FindIndex(lines, l => l.Length > 0 && char.IsDigit(l[0]));
+            var cells = lines[row].Split(',');
+            cells[column] = bad;
+            lines[row] = string.Join(",", cells);
+            File.WriteAllLines(path, lines);
+            var e = Assert.Throws<MocapException>(() => FrameRecording.Load(path));
+            Assert.AreEqual(MocapStatus.Format, e.Status);
+            StringAssert.Contains($"frames.csv:{row + 1}:", e.Message);
+            StringAssert.Contains(expected, e.Message);
+        }
+
         [Test]
         public void PollLatestReturnsTheNewestFrameThenNoData()
         {
