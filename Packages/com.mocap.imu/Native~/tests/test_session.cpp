@@ -14,11 +14,10 @@
 #include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
-#include <pty.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include "e2e_support.h"
+#include "fake_receiver.h"
 #include "test_support.h"
 
 extern "C" {
@@ -35,50 +34,6 @@ double seconds_since(Clock::time_point t0)
 {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
-
-// A pseudo-terminal standing in for the receiver; `link` is a stable symlink to the slave, as
-// udev gives /dev/serial/by-id/..., so an unplug + replug can bring it back at the same path.
-struct FakeReceiver {
-    int master = -1;
-    std::string link;
-
-    explicit FakeReceiver(const std::string &link_path) : link(link_path) { plug(); }
-    ~FakeReceiver() { unplug(); }
-
-    void plug()
-    {
-        int slave = -1;
-        char name[256];
-        struct termios raw;
-        cfmakeraw(&raw);
-        if (openpty(&master, &slave, name, &raw, nullptr) != 0) throw std::runtime_error("openpty");
-        close(slave);  // the engine opens it by name
-        std::filesystem::remove(link);
-        std::filesystem::create_symlink(name, link);
-    }
-    void unplug()
-    {
-        if (master >= 0) close(master);
-        master = -1;
-    }
-    bool write_all(const uint8_t *data, size_t len)
-    {
-        while (len > 0) {
-            ssize_t n = ::write(master, data, len);
-            if (n < 0) {
-                if (errno == EINTR) continue;
-                if (errno == EAGAIN) {
-                    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-                    continue;
-                }
-                return false;
-            }
-            data += n;
-            len -= (size_t)n;
-        }
-        return true;
-    }
-};
 
 mocap_session_config serial_config(const std::string &port)
 {

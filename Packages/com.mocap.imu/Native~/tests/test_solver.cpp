@@ -16,11 +16,10 @@
 #include <vector>
 
 #include <fcntl.h>
-#include <pty.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include "e2e_support.h"
+#include "fake_receiver.h"
 #include "test_support.h"
 
 extern "C" {
@@ -199,40 +198,6 @@ std::string python_with_onnx()
     }
     return "";
 }
-
-struct FakeReceiver {
-    int master = -1;
-    std::string link;
-    explicit FakeReceiver(const std::string &link_path) : link(link_path)
-    {
-        int slave = -1;
-        char name[256];
-        struct termios raw;
-        cfmakeraw(&raw);
-        if (openpty(&master, &slave, name, &raw, nullptr) != 0) throw std::runtime_error("openpty");
-        close(slave);
-        fs::remove(link);
-        fs::create_symlink(name, link);
-    }
-    ~FakeReceiver() { unplug(); }
-    void unplug()
-    {
-        if (master >= 0) close(master);
-        master = -1;
-    }
-    void write_all(const uint8_t *data, size_t len)
-    {
-        while (len > 0) {
-            ssize_t n = ::write(master, data, len);
-            if (n < 0) {
-                if (errno == EINTR || errno == EAGAIN) continue;
-                return;
-            }
-            data += n;
-            len -= (size_t)n;
-        }
-    }
-};
 
 void report_timing(mocap_solver *solver, const char *what)
 {

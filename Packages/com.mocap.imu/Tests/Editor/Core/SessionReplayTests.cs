@@ -343,17 +343,8 @@ namespace Mocap.Imu.Tests
         {
             // Sequence, frame flags and sensor flags are whole numbers: a corrupt cell is a format
             // error naming the file and line, like a bad float cell, not a bare FormatException.
-            var path = Path.Combine(TestPaths.NewTempDirectory("corrupt"), "frames.csv");
-            FrameRecording.Save(path, _run.Frames.ToArray());
-            var lines = File.ReadAllLines(path);
-            int row = Array.FindIndex(lines, l => l.Length > 0 && char.IsDigit(l[0])) + 2; // the second frame
-            var cells = lines[row].Split(',');
-            cells[column] = bad;
-            lines[row] = string.Join(",", cells);
-            File.WriteAllLines(path, lines);
-            var e = Assert.Throws<MocapException>(() => FrameRecording.Load(path));
-            Assert.AreEqual(MocapStatus.Format, e.Status);
-            StringAssert.Contains($"frames.csv:{row + 1}:", e.Message);
+            var e = LoadFramesWithOneCellReplaced(frame: 2, column, bad, out int line);
+            StringAssert.Contains($"frames.csv:{line}:", e.Message);
             StringAssert.Contains(bad, e.Message);
         }
 
@@ -362,18 +353,27 @@ namespace Mocap.Imu.Tests
         [TestCase(1, "-inf", "not a finite number")]
         public void FrameRecordingRefusesNumbersThatAreNotFiniteFloats(int column, string bad, string expected)
         {
-            var path = Path.Combine(TestPaths.NewTempDirectory("nonfinite"), "frames.csv");
+            var e = LoadFramesWithOneCellReplaced(frame: 0, column, bad, out int line);
+            StringAssert.Contains($"frames.csv:{line}:", e.Message);
+            StringAssert.Contains(expected, e.Message);
+        }
+
+        // Saves the replay's frames as CSV with one cell of one frame's row replaced, loads it and
+        // returns the format error; line is the 1-based line of that row.
+        MocapException LoadFramesWithOneCellReplaced(int frame, int column, string value, out int line)
+        {
+            var path = Path.Combine(TestPaths.NewTempDirectory("corrupt"), "frames.csv");
             FrameRecording.Save(path, _run.Frames.ToArray());
             var lines = File.ReadAllLines(path);
-            int row = Array.FindIndex(lines, l => l.Length > 0 && char.IsDigit(l[0]));
+            int row = Array.FindIndex(lines, l => l.Length > 0 && char.IsDigit(l[0])) + frame;
             var cells = lines[row].Split(',');
-            cells[column] = bad;
+            cells[column] = value;
             lines[row] = string.Join(",", cells);
             File.WriteAllLines(path, lines);
             var e = Assert.Throws<MocapException>(() => FrameRecording.Load(path));
-            Assert.AreEqual(MocapStatus.Format, e.Status);
-            StringAssert.Contains($"frames.csv:{row + 1}:", e.Message);
-            StringAssert.Contains(expected, e.Message);
+            Assert.AreEqual(MocapStatus.Format, e.Status, e.Message);
+            line = row + 1;
+            return e;
         }
 
         [Test]
