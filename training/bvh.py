@@ -13,6 +13,7 @@ Units are whatever the file uses (cm for the CMU data); nothing is converted her
 """
 from __future__ import annotations
 
+import math
 import re
 import warnings
 from dataclasses import dataclass, field
@@ -141,6 +142,8 @@ def _parse_hierarchy(tokens):
                 raise BvhError(f"bad OFFSET: {tokens[i + 1:i + 4]}") from e
             if v.shape != (3,):
                 raise BvhError("truncated OFFSET")
+            if not np.isfinite(v).all():
+                raise BvhError(f"OFFSET {tokens[i + 1:i + 4]} is not finite")
             if stack[-1] is None:
                 end_sites[stack[-2]] = v
             else:
@@ -149,8 +152,13 @@ def _parse_hierarchy(tokens):
         elif tu == "CHANNELS":
             if not stack or stack[-1] is None:
                 raise BvhError("CHANNELS outside a joint")
-            k = int(tokens[i + 1])
+            try:
+                k = int(tokens[i + 1])
+            except (ValueError, IndexError) as e:
+                raise BvhError(f"CHANNELS needs a count: {tokens[i + 1:i + 2]}") from e
             chans = tokens[i + 2:i + 2 + k]
+            if k < 0 or len(chans) != k:
+                raise BvhError(f"CHANNELS {k}: the count does not match the channels that follow")
             for c in chans:
                 if c not in _POS and c not in _ROT:
                     raise BvhError(f"unknown channel {c!r}")
@@ -181,7 +189,7 @@ def parse_bvh(text: str) -> BvhClip:
         raise BvhError("MOTION needs 'Frames:' and 'Frame Time:'")
     n_frames = int(mf.group(1))
     frame_time = float(mt.group(1))
-    if not frame_time > 0:
+    if not (frame_time > 0 and math.isfinite(frame_time)):
         raise BvhError(f"bad Frame Time {frame_time}")
     nl = text.find("\n", max(mt.end(), mf.end()))
     body = text[nl + 1:] if nl >= 0 else ""
@@ -202,6 +210,10 @@ def parse_bvh(text: str) -> BvhClip:
         n_frames = data.size // n_ch if n_ch else n_frames
         warnings.warn(f"BVH declares more frames than it holds; using {n_frames}")
     data = data[:n_frames * n_ch].reshape(n_frames, n_ch) if n_ch else np.zeros((n_frames, 0))
+    bad = np.flatnonzero(~np.isfinite(data).all(axis=1))
+    if bad.size:
+        # np.fromstring reads "nan" and "inf"; a damaged file must not turn into NaN rotations
+        raise BvhError(f"MOTION frame {bad[0] + 1} holds a value that is not finite")
     return _build_clip(joints, parents, offsets, channels, end_sites, frame_time, data)
 
 

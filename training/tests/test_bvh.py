@@ -1,4 +1,6 @@
+import math
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -109,3 +111,55 @@ def test_daz_template_is_tpose_like():
     assert rest[t.index("lHand"), 0] > 50 and rest[t.index("rHand"), 0] < -50     # left = +X
     low = min(rest[t.index(f), 1] + t.end_sites[t.index(f)][1] for f in ("lFoot", "rFoot"))
     assert 80 < -low < 86                                                        # hip ~83 cm above toes
+
+
+ODD_NUMBERS = ["1e39", "1e999", "nan", "-inf", "inf", "-0", "", "e", "-", ".", "0x10", "1,5", "-5",
+               "99999999999999999999", "0"]
+
+
+def _damaged_copies(text: str, count: int, seed: int):
+    """Seeded damage of a BVH text: odd numbers, removed/repeated lines, cuts and junk."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        lines = text.split("\n")
+        i = int(rng.integers(len(lines)))
+        kind = int(rng.integers(4))
+        if kind == 0:
+            tokens = lines[i].split()
+            if tokens:
+                t = tokens[int(rng.integers(len(tokens)))]
+                odd = ODD_NUMBERS[int(rng.integers(len(ODD_NUMBERS)))]
+                lines[i] = lines[i].replace(t, odd, 1)
+                yield f"line {i + 1}: {t!r} -> {odd!r}", "\n".join(lines)
+                continue
+            kind = 1
+        if kind == 1:
+            del lines[i]
+            yield f"line {i + 1} removed", "\n".join(lines)
+        elif kind == 2:
+            lines.insert(i, lines[i])
+            yield f"line {i + 1} repeated", "\n".join(lines)
+        else:
+            cut = int(rng.integers(len(text)))
+            yield f"cut at {cut}", text[:cut]
+
+
+def test_damaged_files_are_refused_or_read_into_finite_clips():
+    """`evaluate --bvh DIR` takes any folder: a damaged file must raise BvhError (a message),
+    never another exception, and what is read must be finite with a positive frame time."""
+    text = bvh.format_bvh(motion_to_daz(make_motion("mixed", 1.0, seed=2)), order="ZXY", decimals=4)
+    refused = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)     # "declares more frames than it holds"
+        for what, damaged in _damaged_copies(text, 300, seed=20261122):
+            try:
+                clip = bvh.parse_bvh(damaged)
+            except bvh.BvhError:
+                refused += 1
+                continue
+            except Exception as e:      # noqa: BLE001 - any other exception is the bug looked for
+                pytest.fail(f"{what}: {type(e).__name__} instead of BvhError: {e}")
+            assert math.isfinite(clip.frame_time) and clip.frame_time > 0, what
+            assert np.isfinite(clip.rotations).all() and np.isfinite(clip.root_pos).all(), what
+            assert np.isfinite(clip.offsets).all(), what
+    assert refused > 0
