@@ -25,10 +25,11 @@ def _module(name: str):
         return e
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv=None) -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python3 -m training", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", metavar="command")
-    want = sys.argv[1] if len(sys.argv) > 1 else None
+    args = sys.argv[1:] if argv is None else list(argv)
+    want = args[0] if args else None
     for cmd, (mod, text) in COMMANDS.items():
         sp = sub.add_parser(cmd, help=text, description=text)
         sp.set_defaults(_module=mod)
@@ -40,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
         parser.print_help()
@@ -50,7 +51,13 @@ def main(argv=None) -> int:
         print(f"training {args.command}: module training.{args._module} is not available ({m})",
               file=sys.stderr)
         return 2
-    return int(m.main(args) or 0)
+    from .bvh import BvhError
+    try:
+        return int(m.main(args) or 0)
+    except BvhError as e:
+        # a damaged file in the user's data is a message, not a traceback
+        print(f"training {args.command}: {e}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

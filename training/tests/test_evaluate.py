@@ -134,3 +134,22 @@ def test_cli_on_a_bvh_folder(tmp_path, fixture_dir):
     assert rc == 0
     text = (out / "evaluation.md").read_text()
     assert "2 clips" in text and "| baseline |" in text
+
+
+def test_a_damaged_bvh_in_the_folder_is_named_without_a_traceback(tmp_path, fixture_dir, capsys):
+    import shutil
+    from training.__main__ import main as training_main
+    src, _ = fixture_dir
+    d = tmp_path / "folder"
+    shutil.copytree(src, d)
+    victim = sorted(d.rglob("*.bvh"))[1]
+    lines = victim.read_text().split("\n")
+    motion = lines.index("MOTION")
+    lines[motion + 5] = " ".join(["nan"] + lines[motion + 5].split()[1:])   # one frame damaged
+    victim.write_text("\n".join(lines))
+    rc = training_main(["evaluate", "--bvh", str(d), "--no-torch", "--models", "--out", str(tmp_path / "r"),
+                        "--no-latency", "--no-cache"])
+    err = capsys.readouterr().err
+    assert rc == 1
+    assert victim.name in err and "not finite" in err, err
+    assert "Traceback" not in err
