@@ -48,6 +48,7 @@ def contract_metadata(net: PoseNet, precision: str, model_name: str) -> dict:
         "mocap.state_size": str(net.state_size),
         "mocap.precision": precision,
         "mocap.model_name": model_name,
+        "mocap.wrist_sensor_bone": net.config.wrist_anchor,
     }
 
 
@@ -140,7 +141,7 @@ def convert_fp16(src, dst) -> dict:
 def load_checkpoint(path) -> tuple:
     from .train import load_checkpoint_file
     ck = load_checkpoint_file(path)
-    cfg = ModelConfig(**ck["config"])
+    cfg = ModelConfig.from_dict(ck["config"])
     net = PoseNet(cfg)
     net.load_state_dict(ck["model"])
     return net.eval(), ck

@@ -31,7 +31,7 @@ from dataclasses import dataclass, asdict, replace
 import torch
 import torch.nn as nn
 
-from .skeleton import MIRROR_JOINTS, PARENTS, SENSOR_JOINTS
+from .skeleton import MIRROR_JOINTS, PARENTS, SENSOR_BONES, SENSOR_JOINTS
 
 NUM_SENSORS = 6
 NUM_JOINTS = 24
@@ -50,7 +50,10 @@ def _ancestors(joints):
     return out
 
 
-_ANCESTORS_OF_SENSOR_BONES = _ancestors([j for j in SENSOR_JOINTS if j != 0])
+# The joint whose local rotation is anchored on each sensor (contract order), by where the wrist
+# sensors are (ModelConfig.wrist_anchor): on the back of the hand they measure the hand (the wrist
+# joint's bone); as wrist straps, the forearm (the elbow joint's bone, skeleton.SENSOR_BONES).
+ANCHOR_JOINTS = {"forearm": list(SENSOR_BONES), "hand": list(SENSOR_JOINTS)}
 
 
 @dataclass
@@ -61,9 +64,24 @@ class ModelConfig:
     head: int = 256           # output MLP width
     dropout: float = 0.0      # training only: after the frame MLP, between and after LSTM layers
     anchored: bool = False    # sensor bones' local rotations are residuals on the measured ones
+    # The bone the wrist sensors report, as trained (train --wrist-sensor): "hand" (a sensor on the
+    # back of the hand: the shipped model) or "forearm" (a wrist strap, skeleton.SENSOR_BONES).
+    # Anchored networks anchor it.
+    wrist_anchor: str = "hand"
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ModelConfig":
+        """From a checkpoint's config; unknown keys are ignored, and a checkpoint written before
+        `wrist_anchor` existed was trained with the wrist sensors on the hands."""
+        known = cls.__dataclass_fields__
+        d = {k: v for k, v in d.items() if k in known}
+        d.setdefault("wrist_anchor", "hand")
+        if d["wrist_anchor"] not in ANCHOR_JOINTS:
+            raise ValueError(f"wrist_anchor {d['wrist_anchor']!r}: expected one of {sorted(ANCHOR_JOINTS)}")
+        return cls(**d)
 
 
 DEFAULT_CONFIG = ModelConfig()
@@ -162,12 +180,28 @@ class PoseNet(nn.Module):
         if self.config.anchored:
             return
         self.config.anchored = True
+        self._zero_output_rows([j for j in self.anchor_joints if j != 0])
+
+    def anchor_wrists_on_forearm(self) -> None:
+        """Moves a hand-anchored network's wrist anchoring to the forearm (a warm start): the
+        forearm rows become residuals on the wrist sensors and the wrist rows absolute local
+        rotations, both starting from zero (forearm = measured, wrist at rest)."""
+        if not self.config.anchored or self.config.wrist_anchor == "forearm":
+            self.config.wrist_anchor = "forearm"
+            return
+        self.config.wrist_anchor = "forearm"
+        self._zero_output_rows([18, 19, 20, 21])
+
+    def _zero_output_rows(self, joints) -> None:
         last = self.head[-1]
         with torch.no_grad():
-            for j in SENSOR_JOINTS:
-                if j != 0:
-                    last.weight[j * 6:(j + 1) * 6].zero_()
-                    last.bias[j * 6:(j + 1) * 6].zero_()
+            for j in joints:
+                last.weight[j * 6:(j + 1) * 6].zero_()
+                last.bias[j * 6:(j + 1) * 6].zero_()
+
+    @property
+    def anchor_joints(self) -> list:
+        return ANCHOR_JOINTS[self.config.wrist_anchor]
 
     @property
     def state_layers(self) -> int:
@@ -203,12 +237,14 @@ class PoseNet(nn.Module):
         from forward kinematics of the predicted ancestors (heading frame). A network with a zero
         residual reproduces the measured bone orientation exactly; training learns how far to
         trust it (calibration error) against the rest of the body."""
+        anchors = self.anchor_joints
+        ancestors = _ancestors([j for j in anchors if j != 0])
         glob = {0: rot[:, :, 0]}
         for j in range(1, NUM_JOINTS):
-            if j in _ANCESTORS_OF_SENSOR_BONES:
+            if j in ancestors:
                 glob[j] = glob[PARENTS[j]] @ rot[:, :, j]
         cols = [rot[:, :, j] for j in range(NUM_JOINTS)]
-        for s, j in enumerate(SENSOR_JOINTS):
+        for s, j in enumerate(anchors):
             if j == 0:
                 continue
             measured = glob[PARENTS[j]].transpose(-1, -2) @ rg[:, :, s]

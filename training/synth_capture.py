@@ -93,7 +93,7 @@ def kinematic_signals(motion: sk.Motion):
     midpoints, head joint), ends repeated."""
     g, p = sk.forward_kinematics(motion.local_rot.astype(np.float64),
                                  motion.root_pos.astype(np.float64), motion.offsets)
-    ori = g[:, sk.SENSOR_JOINTS]
+    ori = sk.sensor_bone_orientations(g, motion.local_rot)
     pts = p[:, sk.SENSOR_JOINTS].copy()
     pts[:, 3] = 0.5 * (p[:, 4] + p[:, 7])
     pts[:, 4] = 0.5 * (p[:, 5] + p[:, 8])

@@ -1,18 +1,23 @@
 """Virtual IMUs on a Motion: the inputs the calibrated engine feeds the model, and the targets
 (owner: model).
 
-Sensors ride on the six contract segments (skeleton.SENSOR_JOINTS) at fixed offsets in the bone
-frame (bone frames are parallel to the model frame in the T-pose: X left, Y up, Z forward):
+Sensors ride on the six contract segments at fixed offsets from a joint (skeleton.SENSOR_JOINTS)
+in the frame of the bone they turn with (skeleton.SENSOR_BONES; bone frames are parallel to the
+model frame in the T-pose: X left, Y up, Z forward):
 
-| sensor | joint | offset (default proportions, scaled with the body) |
+| sensor | bone it turns with | offset (default proportions, scaled with the body) |
 |---|---|---|
-| pelvis | 0 pelvis | (0, +0.05, -0.11) m: on the lower back (sacrum / L5), behind the pelvis joint |
-| left / right wrist | 20 / 21 | (-/+0.03, +0.035, 0) m: back of the wrist (the top in a palms-down T-pose), 3 cm up the forearm |
+| pelvis | 0 pelvis | (0, +0.05, -0.11) m from the pelvis joint: on the lower back (sacrum / L5) |
+| left / right wrist | 20 / 21 hand (`wrist="forearm"`: the forearm 18 / 19 with its twist) | (-/+0.03, +0.035, 0) m from the wrist joint (20 / 21): the back of the wrist (the top in a palms-down T-pose), 3 cm up the forearm |
 | left / right shin | 4 / 5 knee | 40 % of the knee -> ankle bone, plus 5 cm forward: the front of the shin |
 | head | 15 head (skull base) | (0, +0.13, 0) m: above the ears (headband) |
 
 * Orientation = global rotation of the sensor's bone (what the engine's T-pose calibration
-  reports); a mounting rotation only matters for the raw sensor signals (`raw_sensor_signals`).
+  reports). The wrist sensors turn with the hand (a sensor on the back of the hand: the shipped
+  model's placement) or, with `wrist="forearm"`, as a wrist strap does: with the forearm turned by
+  the wrist joint's twist about the arm, following pronation but not the hand bending
+  (skeleton.sensor_bone_orientations). A mounting rotation only matters for the raw sensor
+  signals (`raw_sensor_signals`).
 * Acceleration = central second difference of the sensor's world position over +-k frames,
   (p[t+k] - 2 p[t] + p[t-k]) / (k dt)^2 with k = ACC_K = 4 at 60 Hz (+-67 ms, TIP's choice).
   The CMU clips are 24 fps resampled to 60 Hz by slerp, so positions are only piecewise smooth
@@ -213,9 +218,11 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
 
 
 # ------------------------------------------------------------------------------ synthesis
-def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K) -> Sample:
+def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K,
+               wrist: str = "hand") -> Sample:
     """Motion -> Sample. augment: None/False (exact signals), True (default Augmentation) or an
-    Augmentation; rng: numpy Generator (default seeded 0) for the augmentation draws."""
+    Augmentation; rng: numpy Generator (default seeded 0) for the augmentation draws; wrist:
+    where the wrist sensors are, "hand" (the shipped model's placement) or "forearm" (straps)."""
     if augment is True:
         augment = Augmentation()
     if augment and rng is None:
@@ -244,7 +251,7 @@ def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K) -> Sam
             local[:, 0] = r @ local[:, 0]
             root = root @ r.T
     g, p = sk.forward_kinematics(local, root, offsets)
-    bone = g[:, sk.SENSOR_JOINTS]                                                  # (T,6,3,3)
+    bone = sk.sensor_bone_orientations(g, local, wrist)                                  # (T,6,3,3)
     spos = p[:, sk.SENSOR_JOINTS] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(offsets))
     acc = second_difference(spos, fps, k)
     ori = bone.copy()
@@ -311,7 +318,7 @@ def raw_sensor_signals(motion: sk.Motion, mounting=None, k: int = ACC_K) -> dict
     fps = float(motion.fps)
     g, p = sk.forward_kinematics(np.asarray(motion.local_rot, np.float64),
                                  np.asarray(motion.root_pos, np.float64), motion.offsets)
-    bone = g[:, sk.SENSOR_JOINTS]
+    bone = sk.sensor_bone_orientations(g, motion.local_rot)
     spos = p[:, sk.SENSOR_JOINTS] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(motion.offsets))
     acc = second_difference(spos, fps, k)
     m = np.broadcast_to(np.eye(3), (6, 3, 3)) if mounting is None else np.asarray(mounting, np.float64)

@@ -73,6 +73,7 @@ class TrainConfig:
                                       # metric); "squared": its square (punishes outliers more)
     dropout: float | None = 0.1       # PoseNet dropout in training (None: the checkpoint's own)
     anchored: bool = True             # sensor bones as residuals on their measured orientations
+    wrist_sensor: str = "hand"        # where the wrist sensors are: "hand" or "forearm" (straps)
     drift_frames: int = 60
     eval_every_s: float = 180.0
     ckpt_every_s: float = 120.0
@@ -123,7 +124,7 @@ class StreamBatcher:
     """B streams, each playing an augmented clip window by window (see module docstring)."""
 
     def __init__(self, motions, batch: int, window: int, rng: np.random.Generator,
-                 augment: Augmentation | None = Augmentation()):
+                 augment: Augmentation | None = Augmentation(), wrist: str = "hand"):
         self.motions = [m for m in motions if m.num_frames >= window + 1]
         if not self.motions:
             raise ValueError(f"no motion has more than {window} frames")
@@ -131,6 +132,7 @@ class StreamBatcher:
         self.p = lengths / lengths.sum()
         self.total_frames = int(lengths.sum())
         self.batch, self.window, self.rng, self.augment = batch, window, rng, augment
+        self.wrist = wrist
         self.samples = [None] * batch
         self.pos = [0] * batch
 
@@ -138,7 +140,7 @@ class StreamBatcher:
         while True:   # a sped-up short clip can end up shorter than a window: draw again
             m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
             m = vary_motion(m, self.rng, self.augment, self.motions)   # donors are >= a window too
-            s = synthesize(m, self.rng, self.augment)
+            s = synthesize(m, self.rng, self.augment, wrist=self.wrist)
             if s.num_frames >= self.window:
                 break
         self.samples[i] = s
@@ -192,7 +194,7 @@ def validation_set(motions, cfg: TrainConfig) -> list:
         motions = [motions[i] for i in idx]
     out = []
     for m in motions:
-        s = synthesize(m)
+        s = synthesize(m, wrist=cfg.wrist_sensor)
         n = min(s.num_frames, cfg.val_max_frames)
         out.append({k: torch.from_numpy(getattr(s, k)[:n][None]) for k in
                     ("imu_orientation", "imu_acceleration", "local_rot", "root_velocity", "foot_contact")}
@@ -280,7 +282,7 @@ def load_weights(path, device="cpu") -> PoseNet:
     """A PoseNet with the weights of a checkpoint (a training checkpoint or a weights-only one
     written by save_weights)."""
     ck = load_checkpoint_file(path, device)
-    net = PoseNet(ModelConfig(**ck["config"])).to(device)
+    net = PoseNet(ModelConfig.from_dict(ck["config"])).to(device)
     net.load_state_dict(ck["model"])
     return net
 
@@ -347,7 +349,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     rng = np.random.default_rng(cfg.seed)
     if motions is None:
         motions, val_motions = load_data(cfg)
-    model_cfg = replace(SIZES[cfg.size], anchored=cfg.anchored)
+    model_cfg = replace(SIZES[cfg.size], anchored=cfg.anchored, wrist_anchor=cfg.wrist_sensor)
     net = PoseNet(model_cfg).to(device)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     ckpt_dir, results_dir = Path(cfg.ckpt_dir), Path(cfg.results_dir)
@@ -361,7 +363,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         print(f"train: weights from {cfg.init_from}")
     if cfg.resume and (ckpt_dir / "last.pt").is_file():
         ck = load_checkpoint_file(ckpt_dir / "last.pt", device)
-        net = PoseNet(ModelConfig(**ck["config"])).to(device)
+        net = PoseNet(ModelConfig.from_dict(ck["config"])).to(device)
         net.load_state_dict(ck["model"])
         opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
         opt.load_state_dict(ck["optimizer"])
@@ -374,8 +376,15 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         net.set_dropout(cfg.dropout)
     if cfg.anchored:
         net.enable_anchoring()
+    if net.config.wrist_anchor != cfg.wrist_sensor:
+        if cfg.wrist_sensor != "forearm":
+            raise ValueError(f"the weights read the wrist sensors as the {net.config.wrist_anchor}; "
+                             f"training them for the {cfg.wrist_sensor} is not supported")
+        net.anchor_wrists_on_forearm()
+        print("train: the wrist sensors move from the hands to the forearms (wrist straps)")
     batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng,
-                            Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg))
+                            Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg),
+                            wrist=cfg.wrist_sensor)
     val = validation_set(val_motions or [], cfg) if val_motions else []
     steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
     print(f"train: {len(batcher.motions)} clips, {batcher.total_frames} frames "
@@ -477,7 +486,7 @@ def config_from_args(args) -> TrainConfig:
     cfg = TrainConfig()
     for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
-              "arm_jitter_deg", "w_pos", "ckpt_dir", "results_dir"):
+              "arm_jitter_deg", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -527,6 +536,10 @@ def add_arguments(parser) -> None:
                         help="probability that a clip's arms move as in another clip (default 0)")
     parser.add_argument("--arm-jitter", dest="arm_jitter_deg", type=float, default=None,
                         help="slow random shoulder offsets, per-axis sigma in degrees (default 0)")
+    parser.add_argument("--wrist-sensor", dest="wrist_sensor", default=None, choices=["hand", "forearm"],
+                        help="where the synthesised wrist sensors are: hand (back of the hands, the "
+                             "default and the shipped model's) or forearm (wrist straps; a hand-trained "
+                             "--init-from is switched over)")
     parser.add_argument("--pos-weight", dest="w_pos", type=float, default=None,
                         help="weight of the joint-position loss (metres) against the rotation "
                              "loss (default 10)")

@@ -89,6 +89,9 @@ def test_evaluate_end_to_end(tmp_path):
     for s in res.values():
         assert 0 <= s["angle_all"] < 180 and s["pos"] >= 0 and s["drift_2s"] >= 0
         assert np.isfinite(s["jitter"])
+        # per-joint position errors: the roots are aligned, and their mean is the headline figure
+        assert s["per_joint_pos"].shape == (24,) and s["per_joint_pos"][0] == pytest.approx(0.0, abs=1e-6)
+        assert float(np.mean(s["per_joint_pos"])) == pytest.approx(s["pos"], rel=1e-9)
     # The baseline has zero velocity: its drift is the true displacement (walk: > 1 m in 2 s).
     assert res["baseline"]["drift_2s"] > 1.0
     if models:
@@ -98,6 +101,9 @@ def test_evaluate_end_to_end(tmp_path):
         assert r["latency"]["calls"] == 120 and r["latency"]["p50_us"] > 0
     text = (out / "evaluation.md").read_text()
     assert "| baseline |" in text and "<= 10 deg" in text and "<= 4 M" in text
+    assert "## Per joint" in text and "| 20 left_wrist |" in text and "| 23 right_hand |" in text
+    wrist = next(line for line in text.splitlines() if line.startswith("| 20 left_wrist |"))
+    assert len(wrist.split("|")) == 2 + 1 + 2 * len(res)                       # joint + 2 per method
     if models:
         assert "(the same model)" in text and "different models" not in text
     for png in ("per_joint_error.png", "error_over_time.png", "drift.png"):
@@ -153,3 +159,18 @@ def test_a_damaged_bvh_in_the_folder_is_named_without_a_traceback(tmp_path, fixt
     assert rc == 1
     assert victim.name in err and "not finite" in err, err
     assert "Traceback" not in err
+
+
+def test_wrist_sensor_place_changes_what_the_wrist_sensors_report():
+    m = procedural.make_motion("mixed", 2.0, seed=3)
+    strap = ev.synthesize_clip(m, np.random.default_rng(0), wrist="forearm")
+    hand = ev.synthesize_clip(m, np.random.default_rng(0))
+    # same noise draws: only the wrist sensors differ, by the hand's bend
+    np.testing.assert_allclose(strap.imu_orientation[:, [0, 3, 4, 5]], hand.imu_orientation[:, [0, 3, 4, 5]])
+    assert ev.rotation_angle_deg(strap.imu_orientation[:, 1:3], hand.imu_orientation[:, 1:3]).max() > 2.0
+    g, _ = sk.forward_kinematics(hand.local_rot, np.zeros((len(hand.local_rot), 3)), hand.offsets)
+    pred = ev.predict_baseline(strap, "forearm")
+    gb, _ = sk.forward_kinematics(pred.local_rot, np.zeros((len(g), 3)), strap.offsets)
+    np.testing.assert_allclose(gb[:, 18:20], strap.imu_orientation[:, 1:3], atol=1e-5)
+    with pytest.raises(ValueError, match="wrist sensor place 'elbow'"):
+        ev.synthesize_clip(m, np.random.default_rng(0), wrist="elbow")

@@ -176,6 +176,7 @@ def test_anchored_sensor_bones_start_at_their_measured_orientations():
     with torch.no_grad():
         rot = net(o, a)[0][0].double().numpy()
     g, _ = sk.forward_kinematics(rot, np.zeros((rot.shape[0], 3)), sk.DEFAULT_OFFSETS)
+    assert net.anchor_joints == sk.SENSOR_JOINTS
     for si, j in enumerate(sk.SENSOR_JOINTS[1:], start=1):
         err = np.degrees(sk.angle_between_rots(g[:, j], s.imu_orientation[:, si].astype(np.float64)))
         assert err.max() < 1e-3, (j, err.max())
@@ -185,6 +186,37 @@ def test_anchored_sensor_bones_start_at_their_measured_orientations():
         moved = net(o, a)[0][0].double().numpy()
     g2, _ = sk.forward_kinematics(moved, np.zeros((rot.shape[0], 3)), sk.DEFAULT_OFFSETS)
     assert np.degrees(sk.angle_between_rots(g2[:, 15], g[:, 15])).min() > 1.0
+
+
+def test_hand_anchored_checkpoint_moves_its_wrist_anchoring_to_the_forearm():
+    # A checkpoint config from before wrist_anchor existed means a hand-anchored network.
+    assert ModelConfig.from_dict({**SMALL.to_dict(), "unknown_key": 1}) == SMALL
+    legacy = {k: v for k, v in SMALL.to_dict().items() if k != "wrist_anchor"}
+    assert ModelConfig.from_dict({**legacy, "anchored": True}).wrist_anchor == "hand"
+    assert ModelConfig.from_dict({**legacy, "wrist_anchor": "forearm"}).wrist_anchor == "forearm"
+    net = _trained_like(ModelConfig.from_dict(legacy))
+    net.enable_anchoring()                               # zero residuals: hands = wrist sensors
+    assert net.anchor_joints[1:3] == [20, 21]
+    m = procedural.make_motion("mixed", seconds=1.0, seed=5)
+    s = sy.synthesize(m, np.random.default_rng(0), sy.Augmentation(mirror=0.0, speed=(1.0, 1.0)))
+    o, a = torch.from_numpy(s.imu_orientation[None]), torch.from_numpy(s.imu_acceleration[None])
+    wrist_sensors = s.imu_orientation[:, 1:3].astype(np.float64)
+
+    def globals_now():
+        with torch.no_grad():
+            rot = net(o, a)[0][0].double().numpy()
+        return sk.forward_kinematics(rot, np.zeros((rot.shape[0], 3)), sk.DEFAULT_OFFSETS)[0]
+
+    g = globals_now()
+    assert np.degrees(sk.angle_between_rots(g[:, 20:22], wrist_sensors)).max() < 1e-3   # hands
+    net.anchor_wrists_on_forearm()
+    assert net.config.wrist_anchor == "forearm" and net.anchor_joints == sk.SENSOR_BONES
+    g = globals_now()
+    assert np.degrees(sk.angle_between_rots(g[:, 18:20], wrist_sensors)).max() < 1e-3   # forearms
+    # the wrist rows start at rest, the other joints keep their outputs
+    np.testing.assert_allclose(g[:, 20:22], g[:, 18:20], atol=1e-5)
+    net.anchor_wrists_on_forearm()                                  # a second call changes nothing
+    np.testing.assert_allclose(globals_now(), g, atol=1e-6)
 
 
 def test_anchored_network_streams_and_stays_heading_equivariant():

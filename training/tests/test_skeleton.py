@@ -115,3 +115,45 @@ def test_rot6d_and_helpers(rng):
     aa = rng.normal(size=(20, 3))
     assert np.allclose(sk.rot_to_axis_angle(sk.axis_angle_to_rot(aa * 0.5)), aa * 0.5)
     assert np.degrees(sk.rotation_angle(sk.rot_axis("z", np.radians(1e-4)))) == pytest.approx(1e-4, rel=1e-6)
+
+
+def test_wrist_sensors_follow_the_forearm_and_its_twist_not_the_hand_bend(rng):
+    """A wrist strap turns with the forearm and with pronation, not with the hand's flexion."""
+    T = 50
+    local = np.broadcast_to(np.eye(3), (T, 24, 3, 3)).copy()
+    local[:, 16] = sk.random_rotations(T, rng, max_angle=1.5)          # upper arm anywhere
+    local[:, 18] = sk.rot_axis("y", rng.uniform(0, 2.2, T))           # elbow flexion
+    twist = rng.uniform(-1.2, 1.2, T)
+    # a pure swing (axis in the Y-Z plane: flexion and sideways bend together, no twist)
+    bend_axis = np.stack([np.zeros(T), rng.uniform(-0.5, 0.5, T), rng.uniform(-1.0, 1.0, T)], -1)
+    bend = sk.axis_angle_to_rot(bend_axis)
+    local[:, 20] = bend @ sk.rot_axis("x", twist)                     # swing times twist
+    g, _ = sk.forward_kinematics(local, np.zeros((T, 3)))
+    ori = sk.sensor_bone_orientations(g, local, "forearm")
+    assert ori.shape == (T, 6, 3, 3)
+    expected = g[:, 18] @ sk.rot_axis("x", twist)
+    np.testing.assert_allclose(ori[:, 1], expected, atol=1e-9)
+    # the sensor points along the forearm, whatever the hand does
+    np.testing.assert_allclose(ori[:, 1, :, 0], g[:, 18, :, 0], atol=1e-9)
+    assert np.degrees(sk.angle_between_rots(ori[:, 1], g[:, 20])).mean() > 5.0
+    # a pure twist of the wrist turns the sensor exactly as the hand
+    local[:, 20] = sk.rot_axis("x", twist)
+    g, _ = sk.forward_kinematics(local, np.zeros((T, 3)))
+    np.testing.assert_allclose(sk.sensor_bone_orientations(g, local, "forearm")[:, 1], g[:, 20], atol=1e-9)
+    # the other sensors report their own bones; the right wrist is at rest, so it is its forearm
+    np.testing.assert_allclose(ori[:, [0, 3, 4, 5]], g[:, [0, 4, 5, 15]])
+    np.testing.assert_allclose(ori[:, 2], g[:, 19], atol=1e-12)
+    # on the back of the hands (the default, the shipped model's placement) they report the hands
+    np.testing.assert_allclose(sk.sensor_bone_orientations(g, local), g[:, sk.SENSOR_JOINTS])
+    with pytest.raises(ValueError, match="wrist sensor place"):
+        sk.sensor_bones("elbow")
+
+
+def test_twist_about_x_splits_swing_and_twist(rng):
+    a = rng.uniform(-3.0, 3.0, 200)
+    swing_axis = np.stack([np.zeros(200), rng.normal(size=200), rng.normal(size=200)], -1)
+    swing_axis /= np.linalg.norm(swing_axis, axis=-1, keepdims=True)
+    swing = sk.axis_angle_to_rot(swing_axis * rng.uniform(0, 1.4, 200)[:, None])
+    tw = sk.twist_about_x(swing @ sk.rot_axis("x", a))
+    np.testing.assert_allclose(tw, sk.rot_axis("x", a), atol=1e-9)
+    np.testing.assert_allclose(sk.twist_about_x(swing), np.broadcast_to(np.eye(3), (200, 3, 3)), atol=1e-9)

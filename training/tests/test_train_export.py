@@ -1,4 +1,5 @@
 """Training loop smoke test (one epoch on procedural data) and the ONNX export contract."""
+import argparse
 import json
 import math
 from dataclasses import replace
@@ -12,7 +13,7 @@ from training.model import MirrorEnsemble, ModelConfig, PoseNet
 
 CONTRACT_KEYS = ["mocap.contract_version", "mocap.frame_rate", "mocap.sensor_order", "mocap.joint_names",
                  "mocap.joint_parents", "mocap.rest_offsets", "mocap.state_layers", "mocap.state_size",
-                 "mocap.precision", "mocap.model_name"]
+                 "mocap.precision", "mocap.model_name", "mocap.wrist_sensor_bone"]
 
 
 def _motions(n, seed):
@@ -135,6 +136,7 @@ def test_export_follows_the_contract(exported):
         assert sorted(meta) == sorted(CONTRACT_KEYS)
         assert meta["mocap.contract_version"] == "1" and meta["mocap.precision"] == prec
         assert meta["mocap.frame_rate"] == "60"
+        assert meta["mocap.wrist_sensor_bone"] == net.config.wrist_anchor == "hand"
         assert meta["mocap.sensor_order"] == "pelvis,left_wrist,right_wrist,left_shin,right_shin,head"
         assert meta["mocap.joint_names"].split(",") == sk.JOINT_NAMES
         assert [int(x) for x in meta["mocap.joint_parents"].split(",")] == sk.PARENTS
@@ -196,3 +198,24 @@ def test_export_cli_ships_the_mirror_averaged_pair_unless_told_not_to(tmp_path):
         assert int(meta["mocap.state_size"]) == size
         assert ("mirror-averaged" in meta["mocap.model_name"]) == named
         assert meta["mocap.model_name"].endswith("step 7")
+
+
+def test_wrist_sensor_option_reaches_training_and_moves_a_hand_model_to_the_forearm(tmp_path):
+    args = argparse.Namespace(wrist_sensor="forearm", smoke=True)
+    cfg = tr.config_from_args(args)
+    assert cfg.wrist_sensor == "forearm" and tr.TrainConfig().wrist_sensor == "hand"
+    hand = tmp_path / "hand.pt"
+    net = PoseNet(ModelConfig(16, 16, 1, 16, anchored=True))
+    torch.save({"model": net.state_dict(), "config": {k: v for k, v in net.config.to_dict().items()
+                                                      if k != "wrist_anchor"}}, hand)
+    cfg.init_from, cfg.steps = str(hand), 2
+    cfg.ckpt_dir, cfg.results_dir = str(tmp_path / "ck"), str(tmp_path / "res")
+    motions = _motions(3, 0)
+    tr.train(cfg, motions, motions[:1])
+    assert tr.load_weights(tmp_path / "ck" / "last.pt").config.wrist_anchor == "forearm"
+    # a forearm-trained network is not silently trained for the hands again
+    back = tr.config_from_args(argparse.Namespace(smoke=True))
+    back.init_from, back.steps = str(tmp_path / "ck" / "last.pt"), 2
+    back.ckpt_dir, back.results_dir = str(tmp_path / "ck2"), str(tmp_path / "res2")
+    with pytest.raises(ValueError, match="wrist sensors as the forearm"):
+        tr.train(back, motions, motions[:1])
