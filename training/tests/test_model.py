@@ -130,6 +130,20 @@ def test_heading_rotation_matches_atan2_and_survives_lying_down():
     assert abs(float(hl[1, 1]) - 1.0) < 1e-6
 
 
+def test_heading_flips_only_where_the_model_card_says():
+    # The model card's Limits: pitched forward or back, the heading stays put until the pelvis is
+    # tipped arccos((1 - sqrt 5) / 2) = 128.2 deg, flips there, and is defined upside down.
+    pitch = np.radians(np.arange(-179.5, 180.0, 0.5))
+    mats = np.stack([sy._ry(0.7) @ sk.rot_axis("x", p) for p in pitch]).astype(np.float32)
+    h = heading_rotation(torch.from_numpy(mats)).numpy()
+    facing = h[:, 2, 2] * np.cos(0.7) + h[:, 0, 2] * np.sin(0.7)   # cos(heading - 0.7)
+    singular = np.degrees(np.arccos((1 - np.sqrt(5)) / 2))
+    inside = np.abs(np.degrees(pitch)) < singular
+    assert np.all(facing[inside] > 0.999)
+    assert np.all(facing[~inside] < -0.999)
+    assert abs(singular - 128.17) < 0.01
+
+
 def test_rot6d_round_trip():
     r = torch.from_numpy(sk.random_rotations(100, np.random.default_rng(1)).astype(np.float32))
     assert torch.allclose(rot6d_to_matrix(matrix_to_rot6d(r)), r, atol=1e-5)
