@@ -5,7 +5,8 @@
 #                 libFuzzer for a bounded time
 #   windows:      every engine source cross-compiled for Windows (MinGW-w64, syntax + warnings)
 #   dotnet:       the C# core's NUnit tests against the real native library, and a C# 9 syntax
-#                 check of every file of the Unity package (the Unity glue cannot be compiled here)
+#                 check of every file of the Unity package (the Unity glue cannot be compiled here),
+#                 which also fails a component or settings field shown in the inspector without a tooltip
 #   python:       pytest over training/ (when it has tests)
 #   unity package: pytest over scripts/tests (.meta generator and package linter, incl. a lint
 #                 of the real package: run scripts/unity_meta.py after adding files)

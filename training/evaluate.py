@@ -577,7 +577,7 @@ def add_arguments(p):
     src.add_argument("--bvh", help="a folder of BVH files instead (any depth; manifest.csv honoured)")
     p.add_argument("--models", nargs="*", default=[str(m) for m in DEFAULT_MODELS],
                    help="ONNX models (default: the shipped fp32 and fp16)")
-    p.add_argument("--checkpoint", default=None, help="PyTorch checkpoint (default: the newest "
+    p.add_argument("--checkpoint", default=None, help="PyTorch checkpoint (default: the first that exists "
                    "of " + ", ".join(CHECKPOINT_CANDIDATES) + ")")
     p.add_argument("--no-torch", action="store_true", help="skip the PyTorch model")
     p.add_argument("--no-mirror", dest="no_mirror", action="store_true",

@@ -13,13 +13,21 @@ namespace Mocap.Imu
     [AddComponentMenu("Mocap IMU/Calibration Overlay")]
     public sealed class CalibrationOverlay : MonoBehaviour
     {
+        [Tooltip("The session whose sensors are calibrated.")]
         public MocapSessionComponent session;
+        [Tooltip("Index of the character in the session's settings.")]
         [Min(0)] public int character;
+        [Tooltip("Seconds to get into position before each step's window starts.")]
         [Min(0f)] public float countdownSeconds = 3f;
+        [Tooltip("Seconds the heading step collects, the sensors lying still on a table.")]
         [Range(0.2f, 15f)] public float headingSeconds = 2f;
+        [Tooltip("Seconds the T-pose step collects, the performer standing still in the T-pose.")]
         [Range(0.2f, 15f)] public float tPoseSeconds = 2f;
+        [Tooltip("Show the overlay (the toggle key switches it at run time).")]
         public bool visible = true;
+        [Tooltip("Key that shows or hides the overlay (None: no key).")]
         public KeyCode toggleKey = KeyCode.F1;
+        [Tooltip("Where the overlay is drawn on screen, in pixels.")]
         public Rect area = new Rect(10, 10, 460, 330);
 
         /// <summary>One character of a <see cref="MocapSessionComponent"/> as a calibration target.</summary>

@@ -24,6 +24,7 @@ namespace Mocap.Imu
     [AddComponentMenu("Mocap IMU/Humanoid Pose Driver")]
     public sealed class HumanoidPoseDriver : MonoBehaviour
     {
+        [Tooltip("The session whose poses drive this avatar.")]
         public MocapSessionComponent session;
         [Tooltip("Index of the character in the session's settings.")]
         [Min(0)] public int character;

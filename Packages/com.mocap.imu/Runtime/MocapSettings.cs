@@ -39,9 +39,13 @@ namespace Mocap.Imu
         [Tooltip("Playback: schedule the capture's own calibration windows (seconds after its first record). " +
                  "The defaults match `mocapctl synth`'s prelude: heading 0.5-2.5 s, T-pose 5.5-7.5 s.")]
         public bool playbackCalibrationWindows = true;
+        [Tooltip("Playback: start of the heading window (sensors lying still), seconds after the capture's first record.")]
         public float playbackHeadingStart = 0.5f;
+        [Tooltip("Playback: length of the heading window, seconds.")]
         public float playbackHeadingSeconds = 2f;
+        [Tooltip("Playback: start of the T-pose window, seconds after the capture's first record.")]
         public float playbackTPoseStart = 5.5f;
+        [Tooltip("Playback: length of the T-pose window, seconds.")]
         public float playbackTPoseSeconds = 2f;
 
         [Tooltip("Node id of the sensor on each body segment: pelvis, left wrist, right wrist, left shin, right shin, head (-1 = none).")]
@@ -95,6 +99,7 @@ namespace Mocap.Imu
         [Tooltip("The .onnx pose model. Relative paths resolve against the project; in a player, a bare file name is looked up in StreamingAssets.")]
         public string modelPath = "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx";
 
+        [Tooltip("Where the model runs: CPU (always available) or CUDA (needs a CUDA build of ONNX Runtime and a GPU; refused with a clear error otherwise).")]
         public ExecutionProvider executionProvider = ExecutionProvider.Cpu;
 
         [Tooltip("Threads ONNX Runtime uses inside one operator; 0 = its default.")]
@@ -109,7 +114,9 @@ namespace Mocap.Imu
         [Header("Solver")]
         [Tooltip("Planted feet do not slide and stay on the floor.")]
         public bool driftCorrection = true;
+        [Tooltip("Foot-contact probability from which a foot counts as planted.")]
         [Range(0f, 1f)] public float contactThreshold = 0.5f;
+        [Tooltip("Height of the floor the planted feet stand on, metres.")]
         public float floorHeight;
         [Tooltip("Only calibrated frames are solved.")]
         public bool requireCalibration = true;
@@ -119,6 +126,7 @@ namespace Mocap.Imu
         [Min(0f)] public float smoothingBeta = 6f;
 
         [Header("Characters (one sensor set each)")]
+        [Tooltip("One entry per performer: each has its own six sensors and drives its own avatar.")]
         public List<MocapCharacterSource> characters = new List<MocapCharacterSource> { new MocapCharacterSource() };
 
         [Header("Raw capture recording")]

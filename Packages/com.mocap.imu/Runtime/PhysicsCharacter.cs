@@ -28,21 +28,27 @@ namespace Mocap.Imu
         public bool followPhysics = true;
 
         [Header("Joint drives")]
+        [Tooltip("Spring of every joint drive toward the kinematic pose (ArticulationDrive stiffness).")]
         [Min(0f)] public float stiffness = 2000f;
+        [Tooltip("Damping of every joint drive (ArticulationDrive damping).")]
         [Min(0f)] public float damping = 80f;
+        [Tooltip("Most force or torque one joint drive applies (ArticulationDrive forceLimit).")]
         [Min(0f)] public float forceLimit = 1000f;
 
         [Header("Root tracking (upright and drift)")]
         [Tooltip("Spring pulling the hips toward the kinematic hips, per kg (1/s^2).")]
         [Min(0f)] public float rootPositionGain = 200f;
+        [Tooltip("Damping of the hips position spring, per kg (1/s).")]
         [Min(0f)] public float rootPositionDamping = 20f;
         [Tooltip("Spring turning the hips toward the kinematic hips rotation, per kg (1/s^2): keeps the body upright.")]
         [Min(0f)] public float rootRotationGain = 400f;
+        [Tooltip("Damping of the hips rotation spring, per kg (1/s).")]
         [Min(0f)] public float rootRotationDamping = 30f;
         [Tooltip("Most force the root spring applies, as a multiple of body weight (1 = it can carry the whole body).")]
         [Min(0f)] public float maxRootForceBodyWeights = 0.8f;
 
         [Header("Body")]
+        [Tooltip("Mass of the whole physics body, kg, shared among the bones like a human's.")]
         [Min(1f)] public float totalMass = 70f;
         [Tooltip("Collider radius of limbs as a fraction of the avatar's hips height.")]
         [Range(0.01f, 0.2f)] public float limbRadius = 0.06f;

@@ -8,6 +8,7 @@ namespace Mocap.Imu
     [Serializable]
     public sealed class VmcDestination
     {
+        [Tooltip("Index of the character in the session's settings.")]
         [Min(0)] public int character;
         [Tooltip("\"host:port\"; VMC receivers usually listen on 39539 (one port per avatar).")]
         public string address = VmcSender.DefaultDestination;
@@ -22,7 +23,9 @@ namespace Mocap.Imu
     [AddComponentMenu("Mocap IMU/VMC Stream")]
     public sealed class VmcStreamComponent : MonoBehaviour
     {
+        [Tooltip("The session whose poses are streamed.")]
         public MocapSessionComponent session;
+        [Tooltip("One receiver per entry: which character goes to which host:port.")]
         public List<VmcDestination> destinations = new List<VmcDestination> { new VmcDestination() };
         [Tooltip("Bundles per second at most (0 = every pose).")]
         [Min(0f)] public float maxRateHz = 60f;
@@ -30,6 +33,7 @@ namespace Mocap.Imu
         public bool allowRemote;
 
         [Header("Status (read only)")]
+        [Tooltip("Per destination: bundles sent and failed sends, or why it could not be opened.")]
         [SerializeField, TextArea(1, 6)] string statusText = "";
 
         VmcSender[] _senders = Array.Empty<VmcSender>();

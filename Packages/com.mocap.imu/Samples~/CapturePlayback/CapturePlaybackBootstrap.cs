@@ -8,9 +8,16 @@ using UnityEngine;
 /// </summary>
 public sealed class CapturePlaybackBootstrap : MonoBehaviour
 {
+    [Tooltip("Raw capture to play in a loop; relative paths resolve against the project.")]
     public string captureFile = "Packages/com.mocap.imu/Tests/Runtime/Fixtures/walk.cap";
+    [Tooltip("Optional calibration of this capture's sensors (the Calibration window's Save, or " +
+             "`mocapctl replay --save-calibration`); empty = the capture's own calibration windows.")]
+    public string calibrationFile = "";
+    [Tooltip("Humanoid avatar to drive; empty = a procedural one.")]
     public Animator avatar;
+    [Tooltip("Playback pace multiplier.")]
     [Min(0.01f)] public float speed = 1f;
+    [Tooltip("Also add a PhysicsCharacter (ArticulationBody) to the avatar.")]
     public bool physicsCharacter;
 
     void Awake()
@@ -22,7 +29,9 @@ public sealed class CapturePlaybackBootstrap : MonoBehaviour
         source.captureFile = captureFile;
         source.playbackRealtime = true;
         source.playbackSpeed = speed;
-        source.playbackCalibrationWindows = true; // the capture's own heading and T-pose windows
+        source.calibrationFile = calibrationFile;
+        // Without a calibration file, the capture's own heading and T-pose windows calibrate it.
+        source.playbackCalibrationWindows = string.IsNullOrEmpty(calibrationFile);
 
         SampleScene.BuildFloorAndLight();
         var sessionObject = new GameObject("Mocap Session");

@@ -8,10 +8,15 @@ using UnityEngine;
 /// </summary>
 public sealed class LiveAvatarBootstrap : MonoBehaviour
 {
+    [Tooltip("Settings asset to use; empty = default settings with the serial port below.")]
     public MocapSettings settings;
+    [Tooltip("Serial port of the HiPNUC receiver when no settings asset is assigned.")]
     public string serialPort = "COM3";
+    [Tooltip("Humanoid avatar to drive; empty = a procedural one.")]
     public Animator avatar;
+    [Tooltip("TPose: the avatar's bind pose is a T-pose. AlignToSmplTPose: any bind pose, straightened to the model's T-pose.")]
     public Mocap.Imu.Retarget.RigRestPose restPose = Mocap.Imu.Retarget.RigRestPose.TPose;
+    [Tooltip("Also add a PhysicsCharacter (ArticulationBody) to the avatar.")]
     public bool physicsCharacter;
 
     void Awake()

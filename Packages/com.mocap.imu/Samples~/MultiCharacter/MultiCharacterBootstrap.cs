@@ -8,9 +8,13 @@ using UnityEngine;
 /// </summary>
 public sealed class MultiCharacterBootstrap : MonoBehaviour
 {
+    [Tooltip("Settings asset with one entry per character; empty = the test capture played twice, at two speeds.")]
     public MocapSettings settings;
+    [Tooltip("Distance between the avatars, metres.")]
     public float spacing = 1.5f;
+    [Tooltip("Stream every character to its own VMC port on this machine.")]
     public bool streamVmc = true;
+    [Tooltip("VMC port of the first character; the next ones count up from it.")]
     public int firstVmcPort = 39539;
 
     void Awake()

@@ -10,7 +10,9 @@ using UnityEngine;
 [DefaultExecutionOrder(200)]
 public sealed class VrAvatarBootstrap : MonoBehaviour
 {
+    [Tooltip("Settings asset to use; empty = default settings (serial port COM3).")]
     public MocapSettings settings;
+    [Tooltip("Humanoid avatar to drive; empty = a procedural one.")]
     public Animator avatar;
     [Tooltip("The headset transform; empty = Camera.main when an XR device is active.")]
     public Transform head;
