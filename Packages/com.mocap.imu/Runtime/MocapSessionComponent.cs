@@ -62,14 +62,39 @@ namespace Mocap.Imu
             public MocapSolver Solver;
             public MocapSession[] Sessions;
 
-            public void Dispose()
+            public void Dispose() => Shutdown();
+
+            // Closes everything; returns why a character's recording failed (its capture is
+            // incomplete), "" when none did. The last flush and close happen here, so a disk
+            // that filled at the end is only known now.
+            public string Shutdown()
             {
                 Solver?.Dispose();
-                if (Sessions != null) foreach (var s in Sessions) s?.Dispose();
+                string failures = "";
+                if (Sessions != null)
+                {
+                    for (int c = 0; c < Sessions.Length; c++)
+                    {
+                        var session = Sessions[c];
+                        if (session == null) continue;
+                        try
+                        {
+                            var stats = session.Stop();
+                            if (stats.CaptureError != MocapStatus.Ok)
+                                failures += $"recording of character {c} failed ({stats.CaptureError}): {stats.LastError}\n";
+                        }
+                        catch (Exception e) when (e is MocapException || e is InvalidOperationException)
+                        {
+                            failures += $"character {c} did not stop cleanly: {e.Message}\n";
+                        }
+                        session.Dispose();
+                    }
+                }
                 Model?.Dispose();
                 Solver = null;
                 Sessions = null;
                 Model = null;
+                return failures.TrimEnd('\n');
             }
         }
 
@@ -264,15 +289,21 @@ namespace Mocap.Imu
                                                    TaskScheduler.Default);
                 _opening = null;
             }
+            string recordingFailure = "";
             if (_engine != null)
             {
                 try { Closing?.Invoke(this); }
                 catch (Exception e) { Debug.LogException(e, this); }
-                _engine.Dispose();
+                recordingFailure = _engine.Shutdown();
                 _engine = null;
             }
             if (status == MocapComponentStatus.Running || status == MocapComponentStatus.Opening || status == MocapComponentStatus.Ended)
                 SetStatus(MocapComponentStatus.Idle, "");
+            if (recordingFailure.Length > 0)
+            {
+                lastError = recordingFailure;
+                Debug.LogError($"[Mocap IMU] {name}: {recordingFailure}", this);
+            }
         }
 
         /// <summary>Close and open again, keeping each character's calibration.</summary>

@@ -39,7 +39,7 @@ extern "C" {
 #  define MOCAP_API
 #endif
 
-#define MOCAP_API_VERSION 3
+#define MOCAP_API_VERSION 4
 #define MOCAP_SENSOR_COUNT 6
 #define MOCAP_PATH_MAX 260
 
@@ -198,9 +198,17 @@ MOCAP_API mocap_status mocap_session_open(const mocap_session_config *config, mo
 /* Start the reader and processing threads. One thread. */
 MOCAP_API mocap_status mocap_session_start(mocap_session *session);
 
-/* Stop all threads (even while a device read blocks), flush a capture being recorded and free
- * the session. NULL is accepted. After this the handle is invalid. One thread, and no other
- * call on this session may be in progress. */
+/* Stop all threads (even while a device read blocks), then flush and close a capture being
+ * recorded. Returns MOCAP_OK, or the recording's failure (a full disk, a write or deferred close
+ * error; also one that stopped the recording earlier), with mocap_last_error() naming the file
+ * and the cause: check it to know whether the capture on disk is complete. Afterwards the stats
+ * are final (capture_bytes_written is what reached the file), polling returns what was left and
+ * start() is refused. Calling it again returns the same status. One thread, and no other call on
+ * this session may be in progress. */
+MOCAP_API mocap_status mocap_session_stop(mocap_session *session);
+
+/* mocap_session_stop (when it has not run) and free the session. NULL is accepted. After this
+ * the handle is invalid. One thread, and no other call on this session may be in progress. */
 MOCAP_API void mocap_session_close(mocap_session *session);
 
 /* Copy the newest frame into *out. MOCAP_ERR_NO_DATA when no frame is newer than the one the
@@ -441,6 +449,33 @@ MOCAP_API mocap_status mocap_solver_drain(mocap_solver *solver, int32_t characte
 /* Clears a character's recurrent state and root motion (e.g. after a new calibration). Any
  * thread; takes effect before its next frame. */
 MOCAP_API mocap_status mocap_solver_reset_character(mocap_solver *solver, int32_t character);
+
+/* Counters and health of a solver. A frame whose inference fails (ONNX Runtime out of memory,
+ * a model that cannot run these inputs) keeps the character's previous pose and state and is
+ * counted in run_failures; the first and the latest failure are kept with their text. */
+typedef struct mocap_solver_stats {
+    uint64_t ticks;               /* inference calls (one per tick that had a frame) */
+    uint64_t batched_calls;       /* calls with two or more characters */
+    uint64_t max_batch;
+    uint64_t frames_solved;       /* frames fed to the model */
+    uint64_t frames_uncalibrated; /* skipped: not calibrated while require_calibration */
+    uint64_t frames_nonfinite;    /* NaN/Inf inputs: not fed, previous pose held */
+    uint64_t outputs_nonfinite;   /* NaN/Inf model outputs: state kept, previous pose held */
+    uint64_t poses_dropped;       /* live poses lost because the consumer was too slow */
+    uint64_t run_failures;        /* frames whose inference failed (previous pose held) */
+    uint64_t solve_ns_total;      /* gather + inference + poses, summed over ticks */
+    uint64_t solve_ns_max;
+    uint64_t run_ns_total;        /* inside the inference call */
+    int32_t last_run_status;      /* mocap_status of the latest failed inference (0 = none) */
+    uint32_t reserved;
+    char first_run_error[256];    /* the first failure's text (the model, ONNX Runtime's words) */
+    char last_run_error[256];     /* the latest failure's text */
+} mocap_solver_stats;
+
+/* Totals over all characters (character -1) or one character's frame counters (ticks, batches,
+ * timings and the error texts are solver-wide either way). Any thread. */
+MOCAP_API mocap_status mocap_solver_get_stats(mocap_solver *solver, int32_t character,
+                                              mocap_solver_stats *out);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Streaming and export: VMC protocol (OSC over UDP) and BVH files                              */

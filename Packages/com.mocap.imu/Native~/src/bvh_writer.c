@@ -33,6 +33,7 @@ struct bvh_writer {
     int have_previous;
     double previous[BVH_MAX_JOINTS][3]; /* last written Euler angles (radians), for continuity */
     mocap_status error;                 /* first write error */
+    char error_text[256];               /* its message, repeated by every later call */
 };
 
 /* ------------------------------------------------------------------------------------------ */
@@ -165,8 +166,18 @@ static mocap_status io_error(bvh_writer *w, const char *what)
     char buf[128];
     mocap_status st = mocap_fail(MOCAP_ERR_IO, "bvh: %s %s: %s", what, w->path,
                                  mocap_errno_text(errno, buf, sizeof buf));
-    if (w->error == MOCAP_OK) w->error = st;
+    if (w->error == MOCAP_OK) {
+        w->error = st;
+        mocap_copy_error(w->error_text, sizeof w->error_text);
+    }
     return st;
+}
+
+/* A writer that failed stays failed: every later call returns the first error with its text
+ * (mocap_last_error would otherwise still hold whatever the thread did in between). */
+static mocap_status earlier_error(const bvh_writer *w)
+{
+    return mocap_fail(w->error, "%s (nothing written since)", w->error_text);
 }
 
 static void indent(FILE *f, int depth)
@@ -312,7 +323,7 @@ uint64_t bvh_writer_frames(const bvh_writer *w) { return w ? w->frames : 0; }
 mocap_status bvh_writer_flush(bvh_writer *w)
 {
     if (!w) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "bvh: writer is NULL");
-    if (w->error != MOCAP_OK) return w->error;
+    if (w->error != MOCAP_OK) return earlier_error(w);
     if (fflush(w->file) != 0) return io_error(w, "writing");
     mocap_status st = write_count(w);
     if (st != MOCAP_OK) return st;
@@ -346,7 +357,7 @@ mocap_status bvh_writer_append(bvh_writer *w, const float root_position[3],
 {
     if (!w || !root_position || !rotations)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "bvh: NULL argument");
-    if (w->error != MOCAP_OK) return w->error;
+    if (w->error != MOCAP_OK) return earlier_error(w);
     const int J = w->skeleton.joint_count;
     double angles[BVH_MAX_JOINTS][3];
     for (int j = 0; j < J; ++j) {
@@ -390,8 +401,7 @@ mocap_status bvh_writer_append_pose(bvh_writer *w, const mocap_pose *pose)
 mocap_status bvh_writer_close(bvh_writer *w)
 {
     if (!w) return MOCAP_OK;
-    mocap_status st = w->error;
-    if (st == MOCAP_OK) st = bvh_writer_flush(w);
+    mocap_status st = w->error != MOCAP_OK ? earlier_error(w) : bvh_writer_flush(w);
     if (fclose(w->file) != 0 && st == MOCAP_OK) st = io_error(w, "closing");
     free(w);
     return st;

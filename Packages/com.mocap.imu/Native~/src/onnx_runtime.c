@@ -649,6 +649,23 @@ static mocap_status append_provider(OrtSessionOptions *so, const ort_options *o)
     return MOCAP_OK;
 }
 
+/* "[1, 1, 24, 3, 3]" into out, never past cap (a shape the model made can have any rank and
+ * any values); dims beyond the 8 that were read are summarised, not printed. */
+static void format_dims(char *out, size_t cap, const int64_t *dims, size_t rank)
+{
+    if (rank > 8) {
+        snprintf(out, cap, "a rank-%u tensor", (unsigned)rank);
+        return;
+    }
+    size_t len = (size_t)snprintf(out, cap, "[");
+    for (size_t d = 0; d < rank && len < cap; ++d) {
+        int n = snprintf(out + len, cap - len, "%s%lld", d ? ", " : "", (long long)dims[d]);
+        if (n < 0) break;
+        len += (size_t)n;
+    }
+    if (len < cap) snprintf(out + len, cap - len, "]");
+}
+
 /* One inference on a still T-pose (1 character, 1 frame, zero state) with ONNX Runtime
  * allocating the outputs: proves the model runs and that every output has the contract's shape
  * (dimensions a file may leave symbolic are only known here). */
@@ -706,11 +723,8 @@ static mocap_status probe_run(ort_model *m)
         }
         if (!ok) {
             char got[96];
-            size_t len = 0;
-            for (size_t d = 0; d < rank && d < 8; ++d)
-                len += (size_t)snprintf(got + len, sizeof got - len, "%s%lld", d ? ", " : "",
-                                        (long long)dims[d]);
-            r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: output '%s' came out as [%s] for 1 "
+            format_dims(got, sizeof got, dims, rank);
+            r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: output '%s' came out as %s for 1 "
                            "character x 1 frame; the contract needs rank %d (B, T = 1)", m->path,
                            spec->name, got, spec->rank);
         }

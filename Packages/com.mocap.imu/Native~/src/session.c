@@ -41,12 +41,14 @@ struct mocap_session {
     mocap_thread *reader;
     mocap_thread *processor;
     int started;                /* under lock: start() was called (threads exist or starting) */
+    int stopped;                /* under lock: mocap_session_stop ran (threads joined, capture closed) */
     int replay;                 /* data time, not the wall clock, drives frames */
     int replay_fast;            /* replay as fast as possible: back-pressure instead of dropping */
 
     mocap_atomic_int stop;
     mocap_atomic_int connection_state;
     mocap_atomic_int processing_done;
+    mocap_atomic_int reader_done;   /* the reader thread returned (or never ran) */
     mocap_atomic_u64 bytes_received;
     mocap_atomic_u64 bytes_dropped;
     mocap_atomic_u64 frames_dropped;
@@ -64,6 +66,7 @@ struct mocap_session {
     mocap_calibration_report step_report_snapshot[MOCAP_CALIBRATION_HEADING_RESET + 1];
     mocap_session_stats stats_snapshot;
     char async_error[256];
+    char capture_error_text[200]; /* why the recording failed (async_error may move on) */
 
     /* Consumer side only. */
     int have_latest;
@@ -118,9 +121,8 @@ static void queue_end_of_stream(mocap_session *s)
     }
 }
 
-static void reader_main(void *arg)
+static void reader_loop(mocap_session *s)
 {
-    mocap_session *s = (mocap_session *)arg;
     uint8_t overflow[BYTE_CHUNK_CAPACITY];
     char error_text[256];
     int connected = 1;
@@ -134,6 +136,13 @@ static void reader_main(void *arg)
                 mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_CONNECTED);
                 continue;
             }
+            /* Why the device went away, then why it cannot be opened again yet (gone from the
+             * system, busy, no permission): the second is what a user can act on. */
+            char reopen_text[128], combined[256];
+            mocap_copy_error(reopen_text, sizeof reopen_text);
+            snprintf(combined, sizeof combined, "reconnecting: %s (lost: %.80s)", reopen_text,
+                     error_text);
+            set_async_error(s, combined);
             for (int waited = 0; waited < RECONNECT_INTERVAL_MS && !mocap_atomic_load_int(&s->stop);
                  waited += 10)
                 mocap_sleep_ms(10);
@@ -180,6 +189,13 @@ static void reader_main(void *arg)
             connected = 0;
         }
     }
+}
+
+static void reader_main(void *arg)
+{
+    mocap_session *s = (mocap_session *)arg;
+    reader_loop(s);
+    mocap_atomic_store_int(&s->reader_done, 1);
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -253,14 +269,23 @@ static void publish_snapshots(mocap_session *s)
     mocap_mutex_unlock(s->lock);
 }
 
+/* The capture's first failure (mocap_last_error holds its text) into the stats. Later failures
+ * of a writer that already failed only repeat the first. */
+static void note_capture_failure(mocap_session *s, mocap_status status)
+{
+    mocap_mutex_lock(s->lock);
+    if (s->stats_snapshot.capture_error == MOCAP_OK) {
+        mocap_copy_error(s->capture_error_text, sizeof s->capture_error_text);
+        s->stats_snapshot.capture_error = status;
+        snprintf(s->async_error, sizeof s->async_error, "recording stopped: %s",
+                 s->capture_error_text);
+    }
+    mocap_mutex_unlock(s->lock);
+}
+
 static void record_capture_error(mocap_session *s, mocap_status status)
 {
-    char text[200]; /* leaves room for the prefix in async_error */
-    mocap_copy_error(text, sizeof text);
-    mocap_mutex_lock(s->lock);
-    s->stats_snapshot.capture_error = status;
-    snprintf(s->async_error, sizeof s->async_error, "recording stopped: %s", text);
-    mocap_mutex_unlock(s->lock);
+    note_capture_failure(s, status);
     /* Processing goes on without the recording: losing live data for a full disk is worse. */
     capture_writer_close(s->capture);
     s->capture = NULL;
@@ -313,7 +338,11 @@ static void processor_main(void *arg)
             mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_ENDED);
             break;
         }
-        if (mocap_atomic_load_int(&s->stop)) break;
+        /* On stop, the bytes the reader committed before it returned are still recorded and
+         * processed: whatever was read from the port reaches the capture. */
+        if (mocap_atomic_load_int(&s->stop) && mocap_atomic_load_int(&s->reader_done) &&
+            spsc_ring_size(&s->bytes) == 0)
+            break;
         if (!worked) mocap_sleep_ms(IDLE_SLEEP_MS);
     }
     if (s->capture) {
@@ -405,15 +434,18 @@ mocap_status mocap_session_start(mocap_session *s)
 {
     if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session is NULL");
     mocap_mutex_lock(s->lock);
-    int already = s->started;
-    s->started = 1; /* before the threads exist: see mocap_calibration_schedule */
+    int already = s->started, stopped = s->stopped;
+    if (!stopped) s->started = 1; /* before the threads exist: see mocap_calibration_schedule */
     mocap_mutex_unlock(s->lock);
+    if (stopped)
+        return mocap_fail(MOCAP_ERR_STATE, "session was stopped; open a new one to start again");
     if (already) return mocap_fail(MOCAP_ERR_STATE, "session already started");
     const char *failed = NULL;
     if (mocap_thread_start(&s->processor, processor_main, s, "mocap-process") != 0) {
         failed = "could not start the processing thread";
     } else if (mocap_thread_start(&s->reader, reader_main, s, "mocap-reader") != 0) {
         failed = "could not start the reader thread";
+        mocap_atomic_store_int(&s->reader_done, 1);
         mocap_atomic_store_int(&s->stop, 1);
         mocap_thread_join(s->processor);
         s->processor = NULL;
@@ -422,6 +454,7 @@ mocap_status mocap_session_start(mocap_session *s)
         /* Back to the unstarted state, so that a later start() can succeed. */
         mocap_atomic_store_int(&s->stop, 0);
         mocap_atomic_store_int(&s->processing_done, 0);
+        mocap_atomic_store_int(&s->reader_done, 0);
         mocap_mutex_lock(s->lock);
         s->started = 0;
         mocap_mutex_unlock(s->lock);
@@ -430,12 +463,48 @@ mocap_status mocap_session_start(mocap_session *s)
     return MOCAP_OK;
 }
 
+mocap_status mocap_session_stop(mocap_session *s)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session is NULL");
+    mocap_mutex_lock(s->lock);
+    int first = !s->stopped;
+    s->stopped = 1;
+    mocap_mutex_unlock(s->lock);
+    if (first) {
+        mocap_atomic_store_int(&s->stop, 1);
+        if (s->reader) mocap_thread_join(s->reader);
+        if (s->processor) mocap_thread_join(s->processor);
+        s->reader = s->processor = NULL;
+        /* No thread is left: the capture is this thread's. Flush, count, then close, since
+         * some file systems (NFS, FUSE) report a deferred write error only at close. */
+        if (s->capture) {
+            mocap_status st = capture_writer_flush(s->capture);
+            if (st != MOCAP_OK) {
+                record_capture_error(s, st);
+            } else {
+                capture_writer *w = s->capture;
+                s->capture = NULL;
+                const uint64_t written = capture_writer_bytes_written(w);
+                st = capture_writer_close(w);
+                mocap_mutex_lock(s->lock);
+                s->stats_snapshot.capture_bytes_written = written;
+                mocap_mutex_unlock(s->lock);
+                if (st != MOCAP_OK) note_capture_failure(s, st);
+            }
+        }
+    }
+    mocap_mutex_lock(s->lock);
+    const mocap_status capture_status = (mocap_status)s->stats_snapshot.capture_error;
+    mocap_mutex_unlock(s->lock);
+    if (capture_status != MOCAP_OK)
+        return mocap_fail(capture_status, "%s", s->capture_error_text);
+    return MOCAP_OK;
+}
+
 void mocap_session_close(mocap_session *s)
 {
     if (!s) return;
-    mocap_atomic_store_int(&s->stop, 1);
-    if (s->reader) mocap_thread_join(s->reader);
-    if (s->processor) mocap_thread_join(s->processor);
+    mocap_session_stop(s);
     session_free(s);
 }
 

@@ -78,6 +78,11 @@ struct mocap_solver {
     mocap_pose pose;
 
     mocap_atomic_u64 ticks, batched_calls, max_batch, solve_ns_total, solve_ns_max, run_ns_total;
+
+    /* Inference failures: written by the solver thread, read by any (mocap_solver_get_stats). */
+    mocap_mutex *error_lock;
+    int32_t last_run_status;
+    char first_run_error[256], last_run_error[256];
 };
 
 /* ---------------------------------------------------------------------------------------- */
@@ -212,6 +217,18 @@ static void reset_character_state(mocap_solver *s, character *ch)
     ch->have_last_pose = 0;
 }
 
+/* Keeps a failed inference's status and text (mocap_last_error on this thread) for the stats:
+ * the solver thread has no caller to return them to. */
+static void note_run_failure(mocap_solver *s, mocap_status status)
+{
+    mocap_mutex_lock(s->error_lock);
+    s->last_run_status = status;
+    mocap_copy_error(s->last_run_error, sizeof s->last_run_error);
+    if (s->first_run_error[0] == '\0')
+        snprintf(s->first_run_error, sizeof s->first_run_error, "%s", s->last_run_error);
+    mocap_mutex_unlock(s->error_lock);
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* One tick                                                                                    */
 
@@ -265,6 +282,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
     mocap_status rs = ort_stream_run(st);
     const int64_t r1 = mocap_monotonic_ns();
     if (rs != MOCAP_OK) {
+        note_run_failure(s, rs);
         /* The states were not touched (they live in the characters); hold the poses. */
         for (int b = 0; b < nb; ++b) {
             int i = s->batch_index[b];
@@ -446,12 +464,17 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "model info is not usable");
     mocap_solver *s = (mocap_solver *)calloc(1, sizeof *s);
     if (!s) return mocap_fail(MOCAP_ERR_NO_MEMORY, "mocap_solver_open: out of memory");
+    if (mocap_mutex_create(&s->error_lock) != 0) {
+        free(s);
+        return mocap_fail(MOCAP_ERR_NO_MEMORY, "mocap_solver_open: could not create a mutex");
+    }
     s->model = model;
     s->info = *info;
     s->config = cfg;
     mocap_status st = skeleton_init(&s->sk, info->joint_parents, (const float (*)[3])info->rest_offsets,
                                     MOCAP_JOINT_COUNT);
     if (st != MOCAP_OK) {
+        mocap_mutex_destroy(s->error_lock);
         free(s);
         return st;
     }
@@ -553,6 +576,7 @@ void mocap_solver_close(mocap_solver *s)
         free(s->chars[c]->state_h);
         free(s->chars[c]);
     }
+    if (s->error_lock) mocap_mutex_destroy(s->error_lock);
     free(s);
 }
 
@@ -619,7 +643,7 @@ void solver_set_input_tap(mocap_solver *s, solver_input_tap tap, void *user)
     s->tap_user = user;
 }
 
-mocap_status solver_get_stats(mocap_solver *s, int32_t which, solver_stats *out)
+mocap_status mocap_solver_get_stats(mocap_solver *s, int32_t which, mocap_solver_stats *out)
 {
     if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver or out is NULL");
     if (which != -1) {
@@ -643,5 +667,10 @@ mocap_status solver_get_stats(mocap_solver *s, int32_t which, solver_stats *out)
         out->poses_dropped += mocap_atomic_load_u64(&ch->poses_dropped);
         out->run_failures += mocap_atomic_load_u64(&ch->run_failures);
     }
+    mocap_mutex_lock(s->error_lock);
+    out->last_run_status = s->last_run_status;
+    memcpy(out->first_run_error, s->first_run_error, sizeof out->first_run_error);
+    memcpy(out->last_run_error, s->last_run_error, sizeof out->last_run_error);
+    mocap_mutex_unlock(s->error_lock);
     return MOCAP_OK;
 }

@@ -25,26 +25,6 @@ extern "C" {
 ort_model *model_ort(mocap_model *model);
 const mocap_model_info *model_info(const mocap_model *model);
 
-/* Totals of one solver (all characters). */
-typedef struct solver_stats {
-    uint64_t ticks;               /* inference calls (one per tick that had a frame) */
-    uint64_t batched_calls;       /* calls with B >= 2 */
-    uint64_t max_batch;
-    uint64_t frames_solved;       /* frames fed to the model */
-    uint64_t frames_uncalibrated; /* skipped: not calibrated while require_calibration */
-    uint64_t frames_nonfinite;    /* NaN/Inf inputs: not fed, previous pose held */
-    uint64_t outputs_nonfinite;   /* NaN/Inf model outputs: state kept, previous pose held */
-    uint64_t poses_dropped;       /* live characters whose consumer was too slow */
-    uint64_t run_failures;        /* ort_stream_run errors (poses held) */
-    uint64_t solve_ns_total;      /* gather + run + scatter + poses, summed over ticks */
-    uint64_t solve_ns_max;
-    uint64_t run_ns_total;        /* inside ort_stream_run */
-} solver_stats;
-
-/* Totals (any character == -1) or one character's counters (ticks/batched/max/ns are solver
- * wide either way). Any thread. */
-mocap_status solver_get_stats(mocap_solver *solver, int32_t character, solver_stats *out);
-
 /* A calibrated frame as model inputs: orientation [6][3][3] (bone -> model, row-major) from
  * bone_orientation and acceleration [6][3] from bone_acceleration. Returns 0, or -1 when any
  * value is NaN/Inf or a quaternion is zero (nothing of that frame may reach the model). */

@@ -38,7 +38,7 @@ LAYERS, SIZE = 2, 4
 
 VARIANTS = ["valid", "wrong_input_name", "wrong_rank", "missing_metadata", "missing_joint_names",
             "wrong_version", "state_mismatch", "fixed_batch", "wrong_joint_name", "symbolic_dims",
-            "wrong_output_shape"]
+            "wrong_output_shape", "rank_nine_output", "fails_on_impact"]
 
 
 def metadata(**override):
@@ -122,6 +122,37 @@ def build(variant="valid"):
         helper.make_node("Mul", ["state_in_c", "half"], ["c_half"]),
         helper.make_node("Add", ["c_half", "one"], ["state_out_c"]),
     ]
+    if variant == "rank_nine_output":
+        # foot_contact declared [B, T, 2] but reshaped at run time to rank 9: the new shape's
+        # length depends on a data-dependent Slice end (Size(state_in_h) + 1 = 9 at the probe),
+        # so no static inference can see the rank and only the probe run catches it.
+        inits += [const("six_ones", [1] * 6), const("one_i", [1]), const("zero_i", [0])]
+        nodes = [n for n in nodes if n.output[0] != "foot_contact"] + [
+            helper.make_node("Sigmoid", ["rv2"], ["contact3"]),
+            helper.make_node("Shape", ["contact3"], ["contact_shape"]),
+            helper.make_node("Concat", ["six_ones", "contact_shape"], ["shape9"], axis=0),
+            helper.make_node("Size", ["state_in_h"], ["state_size"]),
+            helper.make_node("Reshape", ["state_size", "one_i"], ["state_size1"]),
+            helper.make_node("Add", ["state_size1", "one_i"], ["end9"]),
+            helper.make_node("Slice", ["shape9", "zero_i", "end9"], ["shape_dyn"]),
+            helper.make_node("Reshape", ["contact3", "shape_dyn"], ["foot_contact"]),
+        ]
+    if variant == "fails_on_impact":
+        # A valid model whose inference fails at run time for some inputs (as a GPU out of memory
+        # or a broken operator would): any acceleration above 50 m/s^2 makes foot_contact's
+        # Reshape ask for 3 values per frame where there are 2. The probe (zero acceleration) runs.
+        inits += [const("fifty", np.float32(50.0), np.float32), const("last_axis", [0, 0, 1])]
+        nodes = [n for n in nodes if n.output[0] != "foot_contact"] + [
+            helper.make_node("Sigmoid", ["rv2"], ["contact3"]),
+            helper.make_node("Abs", ["imu_acceleration"], ["acc_abs"]),
+            helper.make_node("ReduceMax", ["acc_abs"], ["acc_max"], keepdims=0),
+            helper.make_node("Greater", ["acc_max", "fifty"], ["impact"]),
+            helper.make_node("Cast", ["impact"], ["impact_i"], to=TensorProto.INT64),
+            helper.make_node("Mul", ["last_axis", "impact_i"], ["extra"]),
+            helper.make_node("Shape", ["contact3"], ["contact_shape"]),
+            helper.make_node("Add", ["contact_shape", "extra"], ["asked_shape"]),
+            helper.make_node("Reshape", ["contact3", "asked_shape"], ["foot_contact"]),
+        ]
     graph = helper.make_graph(nodes, "mocap_fixture", inputs, outputs, inits)
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)],
                               producer_name="make_onnx_fixtures")

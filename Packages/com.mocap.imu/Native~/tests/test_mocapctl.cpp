@@ -69,35 +69,52 @@ TEST(Mocapctl, ReplayOfAMissingFileFailsWithItsName)
     EXPECT_NE(r.output.find("/nonexistent/x.cap"), std::string::npos) << r.output;
 }
 
-TEST(Mocapctl, RecordFromAPseudoTerminalKeepsEveryByte)
+namespace {
+
+// `mocapctl record` from a pseudo-terminal fed with 100 synthetic 0x62 packets; shell_prefix
+// runs before it in the same shell (limits). sent receives the bytes written to the port.
+CommandResult record_from_pty(const std::string &shell_prefix, const std::string &out,
+                              std::vector<uint8_t> &sent)
 {
     int master = -1, slave = -1;
     char name[256];
     struct termios raw;
     cfmakeraw(&raw);
-    ASSERT_EQ(openpty(&master, &slave, name, &raw, nullptr), 0);
+    if (openpty(&master, &slave, name, &raw, nullptr) != 0) return CommandResult{-1, "openpty failed"};
     close(slave);
-    std::string out = test_temp_path("recorded.cap");
-
     synth_config cfg;
     synth_config_defaults(&cfg);
     cfg.motion_s = 1.0;
     auto packets = generate(cfg, "walk");
-    std::vector<uint8_t> sent;
     std::thread writer([&] {
         std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let mocapctl open the port
         for (size_t i = 0; i < 100 && i < packets.size(); ++i) {
             const auto &b = packets[i].bytes;
-            ASSERT_EQ(write(master, b.data(), b.size()), (ssize_t)b.size());
+            if (write(master, b.data(), b.size()) != (ssize_t)b.size()) break;
             sent.insert(sent.end(), b.begin(), b.end());
             std::this_thread::sleep_for(std::chrono::milliseconds(5));
         }
     });
-    CommandResult r = run_command(std::string("record --port ") + name + " --out " + out + " --seconds 2");
+    CommandResult r = run_shell(shell_prefix + std::string(MOCAP_MOCAPCTL) + " record --port " + name +
+                                " --out " + out + " --seconds 2");
     writer.join();
     close(master);
+    return r;
+}
+
+}  // namespace
+
+TEST(Mocapctl, RecordFromAPseudoTerminalKeepsEveryByte)
+{
+    std::string out = test_temp_path("recorded.cap");
+    std::vector<uint8_t> sent;
+    CommandResult r = record_from_pty("", out, sent);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("recorded " + std::to_string(sent.size()) + " bytes"), std::string::npos)
+        << r.output;
+    // The size it reports is the file's final size (read after the last flush and close).
+    const size_t on_disk = read_file_bytes(out).size();
+    EXPECT_NE(r.output.find("(" + std::to_string(on_disk) + " bytes on disk)"), std::string::npos)
         << r.output;
 
     capture_reader *reader = nullptr;
@@ -109,6 +126,22 @@ TEST(Mocapctl, RecordFromAPseudoTerminalKeepsEveryByte)
     while (capture_reader_next(reader, &ns, &data, &len) == MOCAP_OK) recorded.insert(recorded.end(), data, data + len);
     capture_reader_close(reader);
     EXPECT_TRUE(recorded == sent);
+}
+
+// A disk that fills while recording (here a file size limit: writes past it fail with EFBIG,
+// as they fail with ENOSPC on a full disk) is a failed command that says why, never exit 0.
+TEST(Mocapctl, RecordOntoAFullDiskFailsAndSaysWhy)
+{
+    std::string out = test_temp_path("full.cap");
+    std::vector<uint8_t> sent;
+    // 16 blocks (8 KiB in 512-byte blocks, 16 KiB in 1 KiB ones) hold the header but not the
+    // 100 packets (about 50 KB); an ignored SIGXFSZ turns the overrun into a write error.
+    CommandResult r = record_from_pty("ulimit -f 16; trap '' XFSZ; ", out, sent);
+    ASSERT_GT(sent.size(), 20000u);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("the recording failed"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(out), std::string::npos) << r.output;  // names the file
+    EXPECT_LE(read_file_bytes(out).size(), 16384u);
 }
 
 TEST(Mocapctl, LiveOnAWrongPortNamesIt)

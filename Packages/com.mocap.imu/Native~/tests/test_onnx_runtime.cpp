@@ -130,6 +130,8 @@ TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
         {"fixed_batch.onnx", "dimension 0 (B) is fixed to 1"},
         {"wrong_joint_name.onnx", "'left_forearm'"},
         {"wrong_output_shape.onnx", "output 'joint_rotations' dimension 2 (24) is 12"},
+        // Only the probe run sees this rank; its message must not print dims it never read.
+        {"rank_nine_output.onnx", "output 'foot_contact' came out as a rank-9 tensor"},
     };
     for (const auto &c : cases) {
         Opened o;

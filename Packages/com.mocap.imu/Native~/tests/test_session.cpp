@@ -345,6 +345,13 @@ TEST(Session, UnplugIsReportedWithinOneSecondAndReplugResumes)
     mocap_session_stats stats;
     mocap_session_get_stats(session.s, &stats);
     EXPECT_NE(std::string(stats.last_error).find(receiver.link), std::string::npos) << stats.last_error;
+    // While it stays away, last_error says why it cannot be opened again (the port is gone).
+    ASSERT_TRUE(wait_until(session.s, 3, nullptr, [](const mocap_session_stats &st) {
+        return std::string(st.last_error).find("reconnecting: ") == 0;
+    }));
+    mocap_session_get_stats(session.s, &stats);
+    EXPECT_NE(std::string(stats.last_error).find(receiver.link), std::string::npos) << stats.last_error;
+    EXPECT_NE(std::string(stats.last_error).find("(lost: "), std::string::npos) << stats.last_error;
 
     uint64_t before = stats.frames_emitted;
     {
@@ -532,6 +539,109 @@ TEST(Session, DiskFullMidSessionStopsRecordingButNotTracking)
     // bytes: most of the 40,000-byte limit holds data that reached the disk before it was hit.
     EXPECT_GT(bytes, 20000u);
     capture_reader_close(reader);
+}
+
+// Waits (up to 10 s) until the session has decoded `samples` samples: every byte written so far
+// went through the processing thread (and into the capture).
+bool wait_for_samples(mocap_session *s, uint64_t samples)
+{
+    for (int i = 0; i < 1000; ++i) {
+        mocap_session_stats stats;
+        mocap_session_get_stats(s, &stats);
+        if (stats.samples_decoded >= samples) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+}
+
+// stop() hands back the recording's outcome and final numbers, before the handle is freed.
+TEST(Session, StopFlushesTheCaptureAndReportsItsFinalSize)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 31;
+    cfg.motion_s = 1.0;
+    auto packets = generate(cfg);
+    std::string dir = test_temp_dir();
+    FakeReceiver receiver(dir + "/ttyStop");
+    std::string record = dir + "/stopped.cap";
+    mocap_session_config config = serial_config(receiver.link);
+    snprintf(config.capture_path, sizeof config.capture_path, "%s", record.c_str());
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+    size_t sent = 0;
+    for (size_t i = 0; i < 40; ++i) {
+        ASSERT_TRUE(receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size()));
+        sent += packets[i].bytes.size();
+    }
+    ASSERT_TRUE(wait_for_samples(session.s, 40 * 6));
+    ASSERT_EQ(mocap_session_stop(session.s), MOCAP_OK) << mocap_last_error();
+    mocap_session_stats stats;
+    ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
+    EXPECT_EQ(stats.capture_error, MOCAP_OK);
+    EXPECT_EQ(stats.bytes_received, sent);
+    // The file is complete and closed now, and the stats say exactly how big it is.
+    EXPECT_EQ(stats.capture_bytes_written, (uint64_t)std::filesystem::file_size(record));
+    capture_reader *reader = nullptr;
+    ASSERT_EQ(capture_reader_open(record.c_str(), &reader), MOCAP_OK) << mocap_last_error();
+    int64_t ns;
+    const uint8_t *data;
+    size_t len, bytes = 0;
+    while (capture_reader_next(reader, &ns, &data, &len) == MOCAP_OK) bytes += len;
+    capture_reader_close(reader);
+    EXPECT_EQ(bytes, sent);
+    // Stopping twice is harmless; a stopped session does not start again.
+    EXPECT_EQ(mocap_session_stop(session.s), MOCAP_OK);
+    EXPECT_EQ(mocap_session_start(session.s), MOCAP_ERR_STATE);
+    EXPECT_NE(std::string(mocap_last_error()).find("stopped"), std::string::npos);
+}
+
+// A disk that fills at the very end (the last flush, written as the session stops) is the
+// stop's failure: a caller that only stops and closes still learns the capture is incomplete.
+TEST(Session, StopReturnsAFailedLastFlush)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 32;
+    cfg.motion_s = 1.0;
+    auto packets = generate(cfg);
+    std::string dir = test_temp_dir();
+    std::string record = dir + "/last.cap";
+    pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        // Room for the file header (a few hundred bytes), not for the first chunk.
+        struct rlimit limit = {1024, 1024};
+        signal(SIGXFSZ, SIG_IGN);
+        if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(10);
+        FakeReceiver receiver(dir + "/ttyLast");
+        mocap_session_config config = serial_config(receiver.link);
+        snprintf(config.capture_path, sizeof config.capture_path, "%s", record.c_str());
+        mocap_session *s = nullptr;
+        if (mocap_session_open(&config, &s) != MOCAP_OK) _exit(11);
+        if (mocap_session_start(s) != MOCAP_OK) _exit(12);
+        for (size_t i = 0; i < 10; ++i)
+            if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) _exit(13);
+        if (!wait_for_samples(s, 10 * 6)) _exit(14);
+        int code = 0;
+        const mocap_status stopped = mocap_session_stop(s);
+        const std::string why = mocap_last_error();
+        mocap_session_stats stats;
+        mocap_session_get_stats(s, &stats);
+        if (stopped != MOCAP_ERR_IO) code = 15;
+        else if (why.find("last.cap") == std::string::npos) code = 16;
+        else if (stats.capture_error != MOCAP_ERR_IO) code = 17;
+        else if (mocap_session_stop(s) != MOCAP_ERR_IO) code = 18;  // the same answer again
+        else if (stats.capture_bytes_written > 1024) code = 19;
+        mocap_session_close(s);
+        _exit(code);
+    }
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0) << "15: stop said OK, 16: file not named, 17: stats disagree, "
+                                         "18: second stop differs, 19: size beyond the limit";
 }
 
 TEST(Session, StructLayoutTableMatchesTheHeader)

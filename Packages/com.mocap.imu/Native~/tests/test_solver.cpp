@@ -201,8 +201,8 @@ std::string python_with_onnx()
 
 void report_timing(mocap_solver *solver, const char *what)
 {
-    solver_stats st;
-    ASSERT_EQ(solver_get_stats(solver, -1, &st), MOCAP_OK);
+    mocap_solver_stats st;
+    ASSERT_EQ(mocap_solver_get_stats(solver, -1, &st), MOCAP_OK);
     if (st.ticks == 0) return;
     printf("[ timing   ] %s: %llu ticks, per tick %.1f us (inference %.1f us), max %.1f us, "
            "batched calls %llu, max batch %llu\n", what, (unsigned long long)st.ticks,
@@ -353,8 +353,8 @@ TEST_F(SolverOnShippedModel, ReplaySolvedEndToEnd)
     // Every calibrated frame became a pose, nothing lost: poses + skipped == frames emitted.
     mocap_session_stats ss;
     ASSERT_EQ(mocap_session_get_stats(sessions.list[0], &ss), MOCAP_OK);
-    solver_stats st;
-    ASSERT_EQ(solver_get_stats(solver.s, 0, &st), MOCAP_OK);
+    mocap_solver_stats st;
+    ASSERT_EQ(mocap_solver_get_stats(solver.s, 0, &st), MOCAP_OK);
     EXPECT_EQ(ss.frames_dropped, 0u);
     EXPECT_EQ(st.frames_nonfinite, 0u);
     EXPECT_EQ(st.poses_dropped, 0u);
@@ -469,16 +469,16 @@ TEST_F(SolverOnShippedModel, ThreeReplaysAreBatchedInOneCallPerTick)
     for (auto *s : sessions.list) ASSERT_EQ(mocap_session_start(s), MOCAP_OK);
     std::vector<std::vector<mocap_pose>> poses;
     ASSERT_TRUE(drain_to_end(solver.s, 3, poses, 120));
-    solver_stats total;
-    ASSERT_EQ(solver_get_stats(solver.s, -1, &total), MOCAP_OK);
+    mocap_solver_stats total;
+    ASSERT_EQ(mocap_solver_get_stats(solver.s, -1, &total), MOCAP_OK);
     EXPECT_GT(total.batched_calls, 100u);
     EXPECT_EQ(total.max_batch, 3u);
     EXPECT_LT(total.ticks, total.frames_solved);  // fewer calls than frames: batching
     for (int c = 0; c < 3; ++c) {
         mocap_session_stats ss;
         mocap_session_get_stats(sessions.list[c], &ss);
-        solver_stats st;
-        solver_get_stats(solver.s, c, &st);
+        mocap_solver_stats st;
+        mocap_solver_get_stats(solver.s, c, &st);
         EXPECT_EQ(ss.frames_dropped, 0u);
         EXPECT_EQ(st.frames_solved, poses[c].size());
         EXPECT_EQ(st.frames_solved + st.frames_uncalibrated, ss.frames_emitted) << c;
@@ -591,14 +591,76 @@ TEST_F(SolverOnShippedModel, UnpluggedCharacterDoesNotStallTheOthers)
     mocap_session_stats ss;
     mocap_session_get_stats(ls, &ss);
     EXPECT_EQ(ss.connection_state, MOCAP_CONNECTION_DISCONNECTED);
-    solver_stats st;
-    solver_get_stats(solver.s, -1, &st);
+    mocap_solver_stats st;
+    mocap_solver_get_stats(solver.s, -1, &st);
     EXPECT_EQ(st.poses_dropped, 0u);
     // Live poses are stamped on the monotonic clock: receive <= frame <= pose <= now.
     EXPECT_LE(last[0].newest_receive_ns, last[0].frame_emitted_ns);
     EXPECT_LE(last[0].frame_emitted_ns, last[0].pose_emitted_ns);
     EXPECT_LE(last[0].pose_emitted_ns, mocap_monotonic_ns());
     EXPECT_LT(last[0].pose_emitted_ns - last[0].frame_emitted_ns, 200000000LL);  // < 200 ms
+}
+
+// An inference that fails (here a model that cannot run inputs above 50 m/s^2; on a GPU, out of
+// memory) holds the previous pose and state, and the stats say how often and why: the solver
+// thread has no caller to return the error to.
+TEST(Solver, InferenceFailuresAreCountedWithTheirCause)
+{
+    REQUIRE_ORT();
+    std::string dir = test_temp_dir();
+    std::string py = python_with_onnx();
+    ASSERT_FALSE(py.empty()) << "python3 with the onnx package is needed (python3-onnx)";
+    std::string cmd = "\"" + py + "\" \"" + (kTestsDir / "make_onnx_fixtures.py").string() + "\" \"" +
+                      dir + "\" >/dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    Model model;
+    ASSERT_EQ(open_model(dir + "/fails_on_impact.onnx", &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = dir + "/rate.cap";
+    synth_config cfg = short_capture(61, 1.0, "walk", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));  // never started: only its rate is used
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
+    ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
+
+    mocap_frame f;
+    memset(&f, 0, sizeof f);
+    f.flags = MOCAP_FRAME_CALIBRATED | MOCAP_FRAME_COMPLETE;
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) f.sensors[s].bone_orientation[0] = 1.0f;
+    std::vector<mocap_frame> frames(5, f);
+    frames[2].sensors[3].bone_acceleration[1] = 80.0f;  // an impact the model cannot run
+    frames[3].sensors[0].bone_acceleration[0] = -60.0f;
+    mocap_solver_stats st;
+    ASSERT_EQ(mocap_solver_get_stats(solver.s, -1, &st), MOCAP_OK);
+    EXPECT_EQ(st.run_failures, 0u);
+    EXPECT_EQ(st.last_run_status, MOCAP_OK);
+    EXPECT_STREQ(st.last_run_error, "");
+    for (size_t i = 0; i < frames.size(); ++i) {
+        frames[i].sequence = i;
+        frames[i].time_s = 1.0 + i / 60.0;
+        const mocap_frame *fp = &frames[i];
+        solver_solve(solver.s, &ch, &fp, nullptr, 1);
+    }
+    ASSERT_EQ(mocap_solver_get_stats(solver.s, 0, &st), MOCAP_OK);
+    EXPECT_EQ(st.frames_solved, 5u);
+    EXPECT_EQ(st.run_failures, 2u);
+    EXPECT_NE(st.last_run_status, MOCAP_OK);
+    // The text names the model and carries ONNX Runtime's reason.
+    EXPECT_NE(std::string(st.first_run_error).find("fails_on_impact.onnx"), std::string::npos)
+        << st.first_run_error;
+    EXPECT_NE(std::string(st.last_run_error).find("Reshape"), std::string::npos) << st.last_run_error;
+    // Every frame still gave a pose: the failed ones hold the previous one, flagged incomplete.
+    std::vector<mocap_pose> poses(8);
+    uint32_t n = 0;
+    ASSERT_EQ(mocap_solver_drain(solver.s, 0, poses.data(), (uint32_t)poses.size(), &n), MOCAP_OK);
+    ASSERT_EQ(n, 5u);
+    for (int i : {2, 3}) {
+        EXPECT_TRUE(poses[i].flags & MOCAP_POSE_INCOMPLETE) << i;
+        EXPECT_EQ(0, memcmp(poses[i].joint_rotations, poses[1].joint_rotations, sizeof poses[1].joint_rotations));
+    }
+    EXPECT_FALSE(poses[4].flags & MOCAP_POSE_INCOMPLETE);
 }
 
 // NaN/Inf in a frame: the frame is not fed to the model, the previous pose is held and flagged,
@@ -662,8 +724,8 @@ TEST(Solver, NonFiniteInputFramesAreNotFed)
     uint32_t n = 0;
     ASSERT_EQ(mocap_solver_drain(solver.s, 0, poses.data(), (uint32_t)poses.size(), &n), MOCAP_OK);
     ASSERT_EQ(n, 5u);
-    solver_stats st;
-    solver_get_stats(solver.s, 0, &st);
+    mocap_solver_stats st;
+    mocap_solver_get_stats(solver.s, 0, &st);
     EXPECT_EQ(st.frames_nonfinite, 2u);
     EXPECT_EQ(st.frames_uncalibrated, 1u);
     EXPECT_EQ(st.frames_solved, 3u);
@@ -756,6 +818,9 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         {"mocap_solver_config", "smoothing_min_cutoff_hz", offsetof(mocap_solver_config, smoothing_min_cutoff_hz), 4},
         {"mocap_solver_config", "smoothing_beta", offsetof(mocap_solver_config, smoothing_beta), 4},
         {"mocap_solver_config", "", 0, sizeof(mocap_solver_config)},
+        {"mocap_solver_stats", "", 0, sizeof(mocap_solver_stats)},
+        {"mocap_solver_stats", "run_failures", offsetof(mocap_solver_stats, run_failures), 8},
+        {"mocap_solver_stats", "last_run_error", offsetof(mocap_solver_stats, last_run_error), 256},
     };
     for (const auto &e : expected) {
         const mocap_field_layout *r = find(e.s, e.f);
@@ -763,5 +828,5 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->offset, e.offset) << e.s << "." << e.f;
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
-    EXPECT_EQ(mocap_api_version(), 3);
+    EXPECT_EQ(mocap_api_version(), 4);
 }

@@ -322,8 +322,8 @@ static mocap_status run_characters(bench_ctx *b, int characters, double *per_cha
     }
     const double wall = (double)(mocap_monotonic_ns() - t0) * 1e-9;
     if (model_us && solver) {
-        solver_stats ss;
-        if (solver_get_stats(solver, -1, &ss) == MOCAP_OK && ss.ticks)
+        mocap_solver_stats ss;
+        if (mocap_solver_get_stats(solver, -1, &ss) == MOCAP_OK && ss.ticks)
             *model_us = (double)ss.run_ns_total / (double)ss.ticks * 1e-3;
     }
     if (solver) mocap_solver_close(solver);

@@ -109,6 +109,22 @@ static int fail(mocap_status st, const char *what)
     return 1;
 }
 
+/* Inference fails on the solver's thread, where no call returns it: say so at the end of a pose
+ * command. 1 when some frame's inference failed (its pose repeats the previous one), else 0. */
+static int report_inference_failures(mocap_solver *solver)
+{
+    mocap_solver_stats st;
+    if (!solver || mocap_solver_get_stats(solver, -1, &st) != MOCAP_OK || st.run_failures == 0)
+        return 0;
+    fprintf(stderr, "mocapctl: inference failed for %llu of %llu frames (%s; their poses repeat "
+                    "the previous one)\n  first: %s\n",
+            (unsigned long long)st.run_failures, (unsigned long long)st.frames_solved,
+            mocap_status_name((mocap_status)st.last_run_status), st.first_run_error);
+    if (strcmp(st.first_run_error, st.last_run_error) != 0)
+        fprintf(stderr, "  latest: %s\n", st.last_run_error);
+    return 1;
+}
+
 /* The solver options of the pose commands: --smoothing HZ[,BETA] (one-euro output filter:
  * cut-off at rest, Hz, and its rise per rad/s; 0 = the model's raw output). 0 or 2 (usage). */
 static int solver_config_from_args(int argc, char **argv, mocap_solver_config *out)
@@ -1215,6 +1231,7 @@ static int cmd_replay_pose(int argc, char **argv)
     if (written == 0) fprintf(stderr, "mocapctl: no pose was solved (calibration %s)\n",
                               cal_failed ? "refused" : "missing");
     if (replay_ended_early(session)) rc = 1;
+    if (report_inference_failures(solver)) rc = 1;
 done:
     /* Solver first (it consumes the session), then the session, then the model. */
     if (solver) mocap_solver_close(solver);
@@ -1295,6 +1312,7 @@ static int open_live(int argc, char **argv, const char *record_path, float rate_
     s = mocap_session_start(*out);
     if (s != MOCAP_OK) {
         mocap_session_close(*out);
+        *out = NULL; /* callers close what they were handed on their own way out */
         return fail(s, "starting");
     }
     return 0;
@@ -1390,8 +1408,9 @@ static int show_poses_until(mocap_session *session, mocap_model *model,
         mocap_sleep_ms(16);
     }
     printf("\n");
+    const int failed = report_inference_failures(solver);
     mocap_solver_close(solver);
-    return 0;
+    return failed;
 }
 
 static int guided_step(mocap_session *session, int step, const char *instruction, float seconds)
@@ -1474,15 +1493,22 @@ static int cmd_record(int argc, char **argv)
     double limit = seconds ? atof(seconds) : 1e30;
     printf("recording to %s; Ctrl-C to stop\n", out);
     show_status_until(session, limit);
+    /* Stop first: the final flush and the close are where a full disk often shows. */
+    const mocap_status stopped = mocap_session_stop(session);
+    char why[256] = "";
+    if (stopped != MOCAP_OK) snprintf(why, sizeof why, "%s", mocap_last_error());
     mocap_session_stats stats;
     mocap_session_get_stats(session, &stats);
     mocap_session_close(session);
-    printf("recorded %llu bytes from the port (%llu bytes on disk)%s%s\n",
+    printf("\nrecorded %llu bytes from the port (%llu bytes on disk)\n",
            (unsigned long long)stats.bytes_received,
-           (unsigned long long)stats.capture_bytes_written,
-           stats.capture_error ? "; recording failed: " : "",
-           stats.capture_error ? stats.last_error : "");
-    return stats.capture_error ? 1 : 0;
+           (unsigned long long)stats.capture_bytes_written);
+    if (stopped != MOCAP_OK) {
+        fprintf(stderr, "mocapctl record: the recording failed (%s): %s\n",
+                mocap_status_name(stopped), why);
+        return 1;
+    }
+    return 0;
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -1636,6 +1662,7 @@ static int cmd_stream(int argc, char **argv)
             rc = 1;
         }
     }
+    if (report_inference_failures(solver)) rc = 1;
 done:
     if (solver) mocap_solver_close(solver);
     for (int i = 0; i < STREAM_MAX; ++i) {

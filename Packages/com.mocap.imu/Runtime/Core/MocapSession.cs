@@ -101,23 +101,34 @@ namespace Mocap.Imu
 
         /// <summary>
         /// Stop the engine threads (promptly, even while a device read blocks) and close the
-        /// source; a recording capture is flushed. The calibration is kept for a later
-        /// <see cref="Start"/>; scheduled calibration steps are dropped.
+        /// source; a recording capture is flushed and closed. Returns the session's final stats:
+        /// <see cref="MocapSessionStats.CaptureError"/> is not Ok when the recording failed (a full
+        /// disk, also at its last flush or close) and LastError then names the file and the cause;
+        /// CaptureBytesWritten is the file's final size. <see cref="GetStats"/> keeps returning
+        /// them until the next <see cref="Start"/>. The calibration is kept for a later Start;
+        /// scheduled calibration steps are dropped.
         /// </summary>
-        public void Stop()
+        public unsafe MocapSessionStats Stop()
         {
-            if (_handle == null) return;
+            if (_handle == null) return _stoppedStats;
             // The solver holds the native session: closing it here would only be deferred, and a
             // later Start would open a new one the solver never sees.
             if (ConsumingSolver != null)
                 throw new InvalidOperationException("a MocapSolver consumes this session: dispose the solver first");
             _stoppedCalibration = Calibration;
+            // Its status is the capture's outcome, which the final stats carry too.
+            NativeMethods.mocap_session_stop(_handle);
+            MocapSessionStats stats;
+            NativeMethods.Check(NativeMethods.mocap_session_get_stats(_handle, &stats));
+            _stoppedStats = stats;
             _handle.Dispose();
             _handle = null;
             _running = false;
+            return stats;
         }
 
         CalibrationData _stoppedCalibration;
+        MocapSessionStats _stoppedStats;
         bool _disposed;
 
         /// <summary>Stop and free the native session.</summary>
@@ -170,9 +181,11 @@ namespace Mocap.Imu
             return NotReady(status);
         }
 
-        /// <summary>Counters and health of the session. Allocates nothing.</summary>
+        /// <summary>Counters and health of the session (after <see cref="Stop"/>: its final
+        /// stats). Allocates nothing.</summary>
         public unsafe MocapSessionStats GetStats()
         {
+            if (_handle == null && !_disposed) return _stoppedStats;
             MocapSessionStats stats;
             NativeMethods.Check(NativeMethods.mocap_session_get_stats(Handle, &stats));
             return stats;

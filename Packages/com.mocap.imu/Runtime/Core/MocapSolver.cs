@@ -211,6 +211,19 @@ namespace Mocap.Imu
         }
 
         /// <summary>
+        /// Counters and health of the solver: over all characters (<paramref name="character"/>
+        /// -1) or one character's frame counters (ticks, timings and failure texts are
+        /// solver-wide). A failed inference is only visible here (it happens on the engine's
+        /// thread): check <see cref="MocapSolverStats.RunFailures"/>. Allocates nothing.
+        /// </summary>
+        public unsafe MocapSolverStats GetStats(int character = -1)
+        {
+            MocapSolverStats stats;
+            NativeMethods.Check(NativeSolverMethods.mocap_solver_get_stats(Handle, character, &stats));
+            return stats;
+        }
+
+        /// <summary>
         /// Stop the inference thread and free the solver. The sessions and the model stay open
         /// (their owners dispose them) and the sessions may be polled directly again.
         /// </summary>

@@ -27,7 +27,7 @@ namespace Mocap.Imu
         internal const string Library = "mocap_imu";
 
         /// <summary>MOCAP_API_VERSION these bindings mirror.</summary>
-        internal const int ApiVersion = 3;
+        internal const int ApiVersion = 4;
 
         internal const int SensorCount = 6;
         internal const int PathMax = 260;
@@ -58,6 +58,9 @@ namespace Mocap.Imu
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_session_start(SessionHandle session);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_session_stop(SessionHandle session);
 
         // Takes the raw pointer: only SessionHandle.ReleaseHandle calls it.
         [DllImport(Library, CallingConvention = Cdecl)]

@@ -62,5 +62,9 @@ namespace Mocap.Imu
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_solver_reset_character(SolverHandle solver, int character);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_solver_get_stats(SolverHandle solver, int character,
+                                                                  MocapSolverStats* stats);
     }
 }

@@ -49,6 +49,54 @@ namespace Mocap.Imu
         [NativeName("smoothing_beta")] public float SmoothingBeta;
     }
 
+    /// <summary>
+    /// Counters and health of a solver (mocap_solver_stats). A frame whose inference fails (ONNX
+    /// Runtime out of memory, a model that cannot run the inputs) keeps the previous pose and is
+    /// counted in <see cref="RunFailures"/>; the first and latest failures keep their text.
+    /// </summary>
+    [NativeName("mocap_solver_stats")]
+    [StructLayout(LayoutKind.Sequential)]
+    public unsafe struct MocapSolverStats
+    {
+        /// <summary>Inference calls (one per tick that had a frame).</summary>
+        [NativeName("ticks")] public ulong Ticks;
+        /// <summary>Calls that batched two or more characters.</summary>
+        [NativeName("batched_calls")] public ulong BatchedCalls;
+        [NativeName("max_batch")] public ulong MaxBatch;
+        /// <summary>Frames fed to the model.</summary>
+        [NativeName("frames_solved")] public ulong FramesSolved;
+        /// <summary>Frames skipped because the character was not calibrated yet.</summary>
+        [NativeName("frames_uncalibrated")] public ulong FramesUncalibrated;
+        /// <summary>Frames with NaN/Inf inputs: not fed, previous pose held.</summary>
+        [NativeName("frames_nonfinite")] public ulong FramesNonFinite;
+        /// <summary>NaN/Inf model outputs: state kept, previous pose held.</summary>
+        [NativeName("outputs_nonfinite")] public ulong OutputsNonFinite;
+        /// <summary>Live poses lost because the consumer was too slow.</summary>
+        [NativeName("poses_dropped")] public ulong PosesDropped;
+        /// <summary>Frames whose inference failed (previous pose held).</summary>
+        [NativeName("run_failures")] public ulong RunFailures;
+        [NativeName("solve_ns_total")] public ulong SolveNsTotal;
+        [NativeName("solve_ns_max")] public ulong SolveNsMax;
+        [NativeName("run_ns_total")] public ulong RunNsTotal;
+        /// <summary>Status of the latest failed inference (<see cref="MocapStatus.Ok"/>: none).</summary>
+        [NativeName("last_run_status")] public MocapStatus LastRunStatus;
+        [NativeName("reserved")] private uint _reserved;
+        [NativeName("first_run_error")] private fixed byte _firstRunError[256];
+        [NativeName("last_run_error")] private fixed byte _lastRunError[256];
+
+        /// <summary>The first failed inference's text (the model, ONNX Runtime's reason), or "". Allocates.</summary>
+        public string FirstRunError
+        {
+            get { fixed (byte* p = _firstRunError) return NativeText.FromBuffer(p, 256); }
+        }
+
+        /// <summary>The latest failed inference's text, or "". Allocates.</summary>
+        public string LastRunError
+        {
+            get { fixed (byte* p = _lastRunError) return NativeText.FromBuffer(p, 256); }
+        }
+    }
+
     [NativeName("mocap_pose")]
     [StructLayout(LayoutKind.Sequential)]
     internal unsafe struct NativePose

@@ -23,7 +23,7 @@ namespace Mocap.Imu.Tests
         static readonly string[] ExpectedStructs =
         {
             "mocap_sensor_frame", "mocap_frame", "mocap_session_config", "mocap_session_stats",
-            "mocap_sensor_quality", "mocap_calibration_report", "mocap_calibration",
+            "mocap_sensor_quality", "mocap_calibration_report", "mocap_calibration", "mocap_solver_stats",
         };
 
         List<Row> _rows;

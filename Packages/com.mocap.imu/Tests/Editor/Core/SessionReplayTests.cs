@@ -416,9 +416,11 @@ namespace Mocap.Imu.Tests
             int count;
             while (session.Drain(buffer, out count) != MocapPollResult.Frames)
                 Assert.Less(watch.Elapsed.TotalSeconds, 30);
-            session.Stop();
+            var final = session.Stop();
             Assert.IsFalse(session.IsRunning);
-            Assert.Throws<InvalidOperationException>(() => session.GetStats());
+            Assert.Greater(final.BytesReceived, 0ul);
+            Assert.AreEqual(final.BytesReceived, session.GetStats().BytesReceived, "GetStats keeps the final stats");
+            Assert.AreEqual(final.BytesReceived, session.Stop().BytesReceived, "a second Stop returns them too");
 
             session.Start();
             watch.Restart();
@@ -427,6 +429,32 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual(0ul, buffer[0].Sequence, "the reopened replay starts over");
             Assert.AreEqual(0x3Fu, session.Calibration.ValidMask, "calibration kept across Stop/Start");
             Assert.IsTrue(buffer[count - 1].IsCalibrated || !buffer[count - 1].IsComplete);
+        }
+
+        [Test]
+        public void StopClosesTheRecordingAndReportsItsFinalSize()
+        {
+            // A replay recorded again: Stop is where the last chunk is written and the file closed.
+            var copy = Path.Combine(TestPaths.NewTempDirectory("rerecord"), "copy.cap");
+            var config = SessionConfig.Replay(_capture.CapturePath);
+            config.CapturePath = copy;
+            using var session = MocapSession.Open(config);
+            session.Start();
+            var buffer = new MocapFrame[64];
+            var watch = Stopwatch.StartNew();
+            while (session.Drain(buffer, out _) != MocapPollResult.EndOfStream)
+                Assert.Less(watch.Elapsed.TotalSeconds, 60);
+            var final = session.Stop();
+            Assert.AreEqual(MocapStatus.Ok, final.CaptureError, final.LastError);
+            Assert.AreEqual((ulong)new FileInfo(copy).Length, final.CaptureBytesWritten,
+                            "the final stats give the closed file's size");
+            long original = 0, recorded = 0;
+            using (var reader = new CaptureReader(_capture.CapturePath))
+                while (reader.TryReadNext(out var r)) original += r.Bytes.Length;
+            using (var reader = new CaptureReader(copy))
+                while (reader.TryReadNext(out var r)) recorded += r.Bytes.Length;
+            Assert.AreEqual(original, recorded, "every replayed byte is in the new recording");
+            Assert.AreEqual(final.CaptureBytesWritten, session.GetStats().CaptureBytesWritten);
         }
 
         [Test]

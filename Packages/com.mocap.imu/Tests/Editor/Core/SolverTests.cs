@@ -265,7 +265,19 @@ namespace Mocap.Imu.Tests
                         Assert.AreEqual(c, poses[c][i].Character);
                         SolverReplay.AssertSame(expected[i], poses[c][i], $"character {c} pose {i}", 1e-4f);
                     }
+                    // The engine's counters agree with what came out, per character.
+                    var stats = solver.GetStats(c);
+                    Assert.AreEqual((ulong)poses[c].Count, stats.FramesSolved, $"character {c} frames solved");
+                    Assert.AreEqual(0ul, stats.RunFailures);
+                    Assert.AreEqual(MocapStatus.Ok, stats.LastRunStatus);
+                    Assert.AreEqual("", stats.LastRunError);
                 }
+                var total = solver.GetStats();
+                Assert.AreEqual((ulong)(poses[0].Count + poses[1].Count + poses[2].Count), total.FramesSolved);
+                Assert.LessOrEqual(total.MaxBatch, 3ul);
+                Assert.Greater(total.Ticks, 0ul);
+                var refused = Assert.Throws<MocapException>(() => solver.GetStats(3));
+                StringAssert.Contains("character 3", refused.Message);
             }
             finally
             {
