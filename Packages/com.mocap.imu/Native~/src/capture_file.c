@@ -378,6 +378,9 @@ struct capture_reader {
     uint64_t skipped;
     int tail;
     int ended;
+    int resyncing;          /* a resync that ran out of time: continues at resync_scan */
+    int64_t resync_scan;
+    uint64_t resync_damaged;
     int64_t created_unix_ns;
     char source[SOURCE_FIELD];
     char path[MOCAP_PATH_MAX];
@@ -447,12 +450,23 @@ static chunk_result load_chunk(capture_reader *r, int64_t offset, int *io_err, i
 }
 
 /* Find the next valid chunk after a damaged one at bad_offset. Candidates are found by their
- * magic and proven by their CRC; the chunk buffer doubles as the scan window. */
-static mocap_status resync(capture_reader *r, int64_t bad_offset)
+ * magic and proven by their CRC; the chunk buffer doubles as the scan window. A file made of
+ * plausible fake chunk headers costs a 64 KiB read per candidate, so the scan stops at
+ * deadline_ns (0: none) with MOCAP_ERR_TIMEOUT and the next call continues where it stopped. */
+static mocap_status resync(capture_reader *r, int64_t bad_offset, int64_t deadline_ns)
 {
-    uint64_t damaged = 1;
-    int64_t scan = bad_offset + 1;
-    for (;;) {
+    if (!r->resyncing) {
+        r->resyncing = 1;
+        r->resync_scan = bad_offset + 1;
+        r->resync_damaged = 1;
+    }
+    int64_t scan = r->resync_scan;
+    /* Every call gets past one window or candidate at least, however late it is called. */
+    for (int first = 1;; first = 0) {
+        if (!first && deadline_ns != 0 && mocap_monotonic_ns() >= deadline_ns) {
+            r->resync_scan = scan;
+            return MOCAP_ERR_TIMEOUT;
+        }
         size_t got;
         int err = file_read_at(r->fd, scan, r->buf, CHUNK_BUFFER_SIZE, &got);
         if (err) return read_failure(r, err);
@@ -473,21 +487,24 @@ static mocap_status resync(capture_reader *r, int64_t bad_offset)
         chunk_result res = load_chunk(r, candidate, &err, &plausible);
         if (res == CHUNK_IO_ERROR) return read_failure(r, err);
         if (res == CHUNK_VALID) {
-            r->skipped += damaged;
+            r->skipped += r->resync_damaged;
             r->chunks++;
+            r->resyncing = 0;
             return MOCAP_OK;
         }
         /* A damaged chunk of its own, unless the magic was just bytes inside a payload. */
-        if (plausible) damaged++;
+        if (plausible) r->resync_damaged++;
         scan = candidate + 1;
     }
+    r->resyncing = 0;
     r->tail = 1;
     r->ended = 1;
     return MOCAP_ERR_END_OF_STREAM;
 }
 
-static mocap_status next_chunk(capture_reader *r)
+static mocap_status next_chunk(capture_reader *r, int64_t deadline_ns)
 {
+    if (r->resyncing) return resync(r, 0, deadline_ns);
     int err, plausible;
     int64_t offset = r->next_offset;
     chunk_result res = load_chunk(r, offset, &err, &plausible);
@@ -495,7 +512,7 @@ static mocap_status next_chunk(capture_reader *r)
     case CHUNK_VALID: r->chunks++; return MOCAP_OK;
     case CHUNK_EOF: r->ended = 1; return MOCAP_ERR_END_OF_STREAM;
     case CHUNK_IO_ERROR: return read_failure(r, err);
-    default: return resync(r, offset);
+    default: return resync(r, offset, deadline_ns);
     }
 }
 
@@ -573,11 +590,17 @@ mocap_status capture_reader_open(const char *path, capture_reader **out)
 mocap_status capture_reader_next(capture_reader *r, int64_t *receive_ns, const uint8_t **data,
                                  size_t *len)
 {
+    return capture_reader_next_until(r, 0, receive_ns, data, len);
+}
+
+mocap_status capture_reader_next_until(capture_reader *r, int64_t deadline_ns, int64_t *receive_ns,
+                                       const uint8_t **data, size_t *len)
+{
     if (!r || !receive_ns || !data || !len)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "capture_reader_next: NULL argument");
     if (r->ended) return MOCAP_ERR_END_OF_STREAM;
     if (r->records_left == 0) {
-        mocap_status st = next_chunk(r);
+        mocap_status st = next_chunk(r, deadline_ns);
         if (st != MOCAP_OK) return st;
     }
     const uint8_t *p = r->buf + CHUNK_HEADER_SIZE + r->record_offset;

@@ -47,6 +47,11 @@ mocap_status capture_reader_open(const char *path, capture_reader **out);
  * last complete chunk (also when the tail is truncated or corrupt: see capture_reader_tail). */
 mocap_status capture_reader_next(capture_reader *r, int64_t *receive_ns, const uint8_t **data,
                                  size_t *len);
+/* capture_reader_next that gives up at deadline_ns (the monotonic clock; 0: never) while it is
+ * skipping damaged data, returning MOCAP_ERR_TIMEOUT; the next call continues the search. A
+ * replay's reader thread uses it so that a long damaged stretch cannot hold up a stop. */
+mocap_status capture_reader_next_until(capture_reader *r, int64_t deadline_ns, int64_t *receive_ns,
+                                       const uint8_t **data, size_t *len);
 /* 0: ended cleanly; 1: a truncated or corrupt tail was ignored. */
 int capture_reader_tail(const capture_reader *r);
 /* Valid chunks read so far. */

@@ -138,6 +138,11 @@ static mocap_status describe(ort_generic *g, int output, char **name, int *rank,
         if (shape[k] <= 0)
             return mocap_fail(MOCAP_ERR_FORMAT, "%s: %s has a dynamic dimension %zu; the generic "
                               "runner needs static shapes", g->path, *name, k);
+        /* Bounded before multiplying: a static shape can be anything, and the product must
+         * neither wrap (size_t is 32 bits on some targets) nor ask for more than 1 GiB. */
+        if ((uint64_t)shape[k] > (((uint64_t)1 << 28) / c))
+            return mocap_fail(MOCAP_ERR_FORMAT, "%s: %s holds more than 2^28 values (1 GiB); the "
+                              "generic runner refuses it", g->path, *name);
         c *= (size_t)shape[k];
     }
     *rank = (int)r;

@@ -511,6 +511,9 @@ mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion
     }
     st = synth_generate(cfg, motion, motion_user, write_packet, &ctx);
     if (st == MOCAP_OK) st = ctx.status;
+    /* The first failure is the one reported: closing after it must not replace its text. */
+    char first_error[256] = "";
+    if (st != MOCAP_OK) mocap_copy_error(first_error, sizeof first_error);
     mocap_status close_st = capture_writer_close(ctx.writer);
     if (st == MOCAP_OK) st = close_st;
     if (ctx.truth) {
@@ -519,5 +522,6 @@ mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion
         if (bad && st == MOCAP_OK)
             st = mocap_fail(MOCAP_ERR_IO, "truth file %s: write failed (disk full?)", truth_path);
     }
+    if (first_error[0] != '\0') return mocap_fail(st, "%s", first_error);
     return st;
 }

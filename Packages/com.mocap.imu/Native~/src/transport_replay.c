@@ -37,8 +37,13 @@ static int64_t due_time(replay_transport *r, int64_t recorded_ns)
         r->first_record_ns = recorded_ns;
         r->have_first = 1;
     }
-    /* Offsets from the first record keep the arithmetic exact over long captures. */
-    double offset = (double)(recorded_ns - r->first_record_ns) / r->speed;
+    /* Offsets from the first record keep the arithmetic exact over long captures. Taken in
+     * double and capped (at ~127 years either way) because a damaged or hand-made capture can
+     * hold any int64 times, whose difference would overflow. */
+    const double cap = 4.0e18;
+    double offset = ((double)recorded_ns - (double)r->first_record_ns) / r->speed;
+    if (offset > cap) offset = cap;
+    if (offset < -cap) offset = -cap;
     return r->first_mono_ns + (int64_t)llround(offset);
 }
 
@@ -56,7 +61,10 @@ static mocap_status replay_read(transport *t, uint8_t *buf, size_t cap, int time
         int64_t ns;
         const uint8_t *data;
         size_t len;
-        mocap_status st = capture_reader_next(r->reader, &ns, &data, &len);
+        /* Bounded like a device read, so the session's stop is seen between calls. */
+        const int64_t deadline = mocap_monotonic_ns() + (int64_t)(timeout_ms > 0 ? timeout_ms : 1) * 1000000LL;
+        mocap_status st = capture_reader_next_until(r->reader, deadline, &ns, &data, &len);
+        if (st == MOCAP_ERR_TIMEOUT) return st;
         if (st == MOCAP_ERR_END_OF_STREAM) {
             r->ended = 1;
             return mocap_fail(MOCAP_ERR_END_OF_STREAM, "%s: end of replay", r->base.description);

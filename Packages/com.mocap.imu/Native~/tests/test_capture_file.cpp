@@ -133,6 +133,37 @@ bool contains(const std::string &text, const std::string &part)
     return text.find(part) != std::string::npos;
 }
 
+// A stretch of n fake chunk headers that each look plausible (magic, a 64 KiB payload, one
+// record) so that the reader must read and CRC a whole payload before rejecting each.
+std::vector<uint8_t> fake_chunk_headers(size_t n)
+{
+    std::vector<uint8_t> bytes;
+    for (size_t i = 0; i < n; i++) {
+        uint8_t h[36] = {'M', 'C', 'H', 'K'};
+        const uint32_t payload = 65536, count = 1;
+        std::memcpy(h + 4, &payload, 4);  // little-endian host, as the format
+        std::memcpy(h + 8, &count, 4);
+        h[20] = static_cast<uint8_t>(i);  // not all alike
+        bytes.insert(bytes.end(), h, h + sizeof h);
+    }
+    return bytes;
+}
+
+// good chunk 0, n fake headers, good chunks 1.. (written by the real writer, then spliced).
+std::string capture_with_fake_headers(const std::string &name, size_t n,
+                                      const std::vector<std::vector<Rec>> &groups)
+{
+    const std::string whole = test_temp_path(name + ".whole");
+    auto offsets = write_chunks(whole, groups);
+    std::vector<uint8_t> good = read_file_bytes(whole), spliced(good.begin(), good.begin() + offsets[1]);
+    std::vector<uint8_t> fakes = fake_chunk_headers(n);
+    spliced.insert(spliced.end(), fakes.begin(), fakes.end());
+    spliced.insert(spliced.end(), good.begin() + offsets[1], good.end());
+    const std::string path = test_temp_path(name);
+    write_file_bytes(path, spliced);
+    return path;
+}
+
 } // namespace
 
 TEST(CaptureFile, RoundTripOfThousandsOfRandomRecords)
@@ -402,6 +433,46 @@ TEST(CaptureFile, CorruptMiddleChunkIsSkippedAndLaterChunksStillRead)
     EXPECT_EQ(res.recs.size(), 80u);
     EXPECT_EQ(res.skipped, 0u);
     EXPECT_EQ(res.tail, 1);
+}
+
+// Skipping damaged data gives up at a deadline and resumes on the next call, finding exactly
+// what an unhurried read finds: a replay thread stays responsive over any damage.
+TEST(CaptureFile, ResyncWithADeadlineResumesWhereItStopped)
+{
+    auto groups = make_groups(12, 3, 10, 200);
+    const std::string path = capture_with_fake_headers("fakes.mcap", 300, groups);
+    ReadResult plain = read_capture(path);
+    ASSERT_EQ(plain.end_status, MOCAP_ERR_END_OF_STREAM) << plain.error;
+    ASSERT_EQ(plain.recs.size(), 30u);
+    EXPECT_EQ(plain.chunks, 3u);
+
+    capture_reader *r = nullptr;
+    ASSERT_EQ(capture_reader_open(path.c_str(), &r), MOCAP_OK) << mocap_last_error();
+    std::vector<Rec> recs;
+    int timeouts = 0;
+    for (;;) {
+        int64_t ns;
+        const uint8_t *data;
+        size_t len;
+        // A deadline already past: every call may look at one candidate at most.
+        mocap_status st = capture_reader_next_until(r, 1, &ns, &data, &len);
+        if (st == MOCAP_ERR_TIMEOUT) {
+            ++timeouts;
+            ASSERT_LT(timeouts, 100000);
+            continue;
+        }
+        if (st != MOCAP_OK) {
+            EXPECT_EQ(st, MOCAP_ERR_END_OF_STREAM) << mocap_last_error();
+            break;
+        }
+        recs.push_back(Rec{ns, std::vector<uint8_t>(data, data + len)});
+    }
+    EXPECT_EQ(timeouts, 299);  // one stop per candidate (the first fake is rejected before the search)
+    EXPECT_EQ(capture_reader_chunks(r), plain.chunks);
+    EXPECT_EQ(capture_reader_skipped(r), plain.skipped);
+    capture_reader_close(r);
+    ASSERT_EQ(recs.size(), plain.recs.size());
+    for (size_t i = 0; i < recs.size(); i++) ASSERT_TRUE(recs[i] == plain.recs[i]) << i;
 }
 
 TEST(CaptureFile, TruncationAtEveryOffsetOfTheLastChunkGivesACleanPrefix)

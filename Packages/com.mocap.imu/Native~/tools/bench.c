@@ -165,6 +165,8 @@ int mocapctl_bench_decode(double seconds, double *mb_per_s)
 #include "synth.h"
 
 #if defined(__linux__)
+#include <errno.h>
+#include <fcntl.h>
 #include <pty.h>
 #include <time.h>
 #include <unistd.h>
@@ -392,11 +394,18 @@ static void pty_writer_main(void *arg)
         if (t > w->skip_s + w->seconds) break;
         if (!start) start = mocap_monotonic_ns() - (int64_t)((t - w->skip_s) * 1e9);
         sleep_until(start + (int64_t)((t - w->skip_s) * 1e9));
+        /* The fd is non-blocking: a session that stopped reading fills the pty, and a blocked
+         * write would keep this thread (and the join) waiting forever. */
         size_t off = 0;
-        while (off < len) {
+        while (off < len && !w->stop) {
             ssize_t n = write(w->fd, data + off, len - off);
-            if (n <= 0) break;
-            off += (size_t)n;
+            if (n > 0) {
+                off += (size_t)n;
+            } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) {
+                mocap_sleep_ms(1);
+            } else {
+                break;
+            }
         }
     }
     w->done_ns = mocap_monotonic_ns();
@@ -418,6 +427,7 @@ static int bench_latency(bench_ctx *b)
         printf("latency: skipped (openpty failed)\n");
         return 0;
     }
+    fcntl(master, F_SETFL, fcntl(master, F_GETFL) | O_NONBLOCK); /* see pty_writer_main */
     const double seconds = b->o->latency_seconds > 0 ? b->o->latency_seconds : 10.0;
     mocap_session_config cfg;
     mocap_config_defaults(&cfg);
