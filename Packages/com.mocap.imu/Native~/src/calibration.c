@@ -608,8 +608,12 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
 
     /* Write a sibling file and rename it over the target, so a crash or a full disk never
      * leaves a half-written calibration behind. */
+    /* Named per process and per call: two saves to one path at once (the API allows any
+     * thread) must not write into one temporary file. */
+    static mocap_atomic_u64 save_counter;
     char tmp[4096];
-    int n = snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    int n = snprintf(tmp, sizeof tmp, "%s.%lu-%llu.tmp", path, mocap_process_id(),
+                     (unsigned long long)mocap_atomic_add_u64(&save_counter, 1));
     if (n < 0 || (size_t)n >= sizeof tmp)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save: path is too long");
     FILE *f = mocap_fopen(tmp, "w");
@@ -637,9 +641,12 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
         ok = ok && fputc('\n', f) != EOF;
     }
     int err = errno;
-    if (fflush(f) != 0 && ok) {
-        ok = 0;
-        err = errno;
+    if (ok) {
+        const int flush_err = mocap_flush_to_disk(f);
+        if (flush_err != 0) {
+            ok = 0;
+            err = flush_err;
+        }
     }
     if (fclose(f) != 0 && ok) {
         ok = 0;

@@ -12,6 +12,7 @@
  * (liblo's oscdump, tests/test_vmc_oscdump.cpp) decodes what we send. */
 #include "osc_encoder.h"
 
+#include <math.h>
 #include <string.h>
 
 static void fail(osc_writer *w, const char *why)
@@ -198,8 +199,10 @@ size_t osc_writer_finish(osc_writer *w)
 uint64_t osc_timetag_from_unix(double seconds)
 {
     /* NTP era 0 starts 1900-01-01; the Unix epoch is 2208988800 s later. */
-    if (!(seconds >= 0)) return OSC_TIMETAG_IMMEDIATELY;
-    double ntp = seconds + 2208988800.0;
+    if (!(seconds >= 0) || !isfinite(seconds)) return OSC_TIMETAG_IMMEDIATELY;
+    /* The 32-bit seconds field wraps every 2^32 s (NTP eras; era 1 starts in 2036). Wrapping
+     * here keeps the conversion to integers defined for any time. */
+    double ntp = fmod(seconds + 2208988800.0, 4294967296.0);
     uint64_t whole = (uint64_t)ntp;
     double frac = ntp - (double)whole;
     uint64_t f = (uint64_t)(frac * 4294967296.0);

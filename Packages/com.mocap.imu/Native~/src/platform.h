@@ -76,6 +76,11 @@ int mocap_remove_file(const char *path);
  * where rename() refuses to replace): at every moment one of the two files is complete.
  * 0 or an errno value. */
 int mocap_replace_file(const char *from, const char *to);
+/* fflush, then ask the OS to put the file's data on the disk (fsync / _commit), so that a
+ * rename that follows never exposes an empty file after a power loss. 0 or an errno value. */
+int mocap_flush_to_disk(FILE *f);
+/* This process's id (for names that must not collide between processes). */
+unsigned long mocap_process_id(void);
 
 #if defined(_WIN32)
 #include <wchar.h>

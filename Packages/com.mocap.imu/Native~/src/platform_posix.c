@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #if defined(__FreeBSD__) || defined(__OpenBSD__)
 #include <pthread_np.h>
@@ -134,6 +135,14 @@ int mocap_replace_file(const char *from, const char *to)
 {
     return rename(from, to) == 0 ? 0 : (errno ? errno : EIO);
 }
+
+int mocap_flush_to_disk(FILE *f)
+{
+    if (fflush(f) != 0) return errno ? errno : EIO;
+    return fsync(fileno(f)) == 0 ? 0 : (errno ? errno : EIO);
+}
+
+unsigned long mocap_process_id(void) { return (unsigned long)getpid(); }
 
 void mocap_sleep_ms(int ms)
 {

@@ -6,6 +6,7 @@
 #define _WIN32_WINNT 0x0601 /* CreateWaitableTimerExW */
 #endif
 #include <windows.h>
+#include <io.h>
 #include <process.h>
 
 #include "platform.h"
@@ -177,6 +178,14 @@ int mocap_remove_file(const char *path)
     if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0) return -1;
     return _wremove(wpath);
 }
+
+int mocap_flush_to_disk(FILE *f)
+{
+    if (fflush(f) != 0) return errno ? errno : EIO;
+    return _commit(_fileno(f)) == 0 ? 0 : (errno ? errno : EIO);
+}
+
+unsigned long mocap_process_id(void) { return (unsigned long)GetCurrentProcessId(); }
 
 int mocap_replace_file(const char *from, const char *to)
 {

@@ -138,10 +138,14 @@ static void reader_loop(mocap_session *s)
             }
             /* Why the device went away, then why it cannot be opened again yet (gone from the
              * system, busy, no permission): the second is what a user can act on. */
-            char reopen_text[128], combined[256];
+            char reopen_text[240], combined[256];
             mocap_copy_error(reopen_text, sizeof reopen_text);
-            snprintf(combined, sizeof combined, "reconnecting: %s (lost: %.80s)", reopen_text,
-                     error_text);
+            snprintf(combined, sizeof combined, "reconnecting: %s", reopen_text);
+            /* The loss's own text only where it fits: long port paths fill the line. */
+            const size_t used = strlen(combined);
+            if (used + 16 < sizeof combined)
+                snprintf(combined + used, sizeof combined - used, " (lost: %.*s)",
+                         (int)(sizeof combined - used - 10), error_text);
             set_async_error(s, combined);
             for (int waited = 0; waited < RECONNECT_INTERVAL_MS && !mocap_atomic_load_int(&s->stop);
                  waited += 10)

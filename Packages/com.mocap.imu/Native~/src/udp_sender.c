@@ -207,7 +207,12 @@ mocap_status udp_sender_open(const char *destination, int allow_remote, udp_send
     }
 
     char err[160];
+#if defined(SOCK_CLOEXEC)
+    /* Not inherited by programs the host starts (the Unity editor runs tools). */
+    s->sock = socket(s->addr.ss_family, SOCK_DGRAM | SOCK_CLOEXEC, IPPROTO_UDP);
+#else
     s->sock = socket(s->addr.ss_family, SOCK_DGRAM, IPPROTO_UDP);
+#endif
     if (s->sock == UDP_INVALID) {
         int e = last_socket_error();
         free(s);

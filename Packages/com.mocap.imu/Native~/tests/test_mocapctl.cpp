@@ -144,6 +144,48 @@ TEST(Mocapctl, RecordOntoAFullDiskFailsAndSaysWhy)
     EXPECT_LE(read_file_bytes(out).size(), 16384u);
 }
 
+// A path longer than the engine's path field would be cut short and open (or, for a recording,
+// overwrite) some other file: refused up front, naming it.
+TEST(Mocapctl, PathsLongerThanTheEngineTakesAreRefused)
+{
+    const std::string long_path = test_temp_dir() + "/" + std::string(300, 'x') + ".cap";
+    CommandResult r = run_command("record --port /dev/ttyNOPE0 --out " + long_path + " --seconds 1");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("the recording path is"), std::string::npos) << r.output;
+    CommandResult replay = run_command("replay " + long_path);
+    EXPECT_NE(replay.exit_code, 0);
+    EXPECT_NE(replay.output.find("the capture path is"), std::string::npos) << replay.output;
+}
+
+// A receiver that sends nothing (wrong port or baud rate, sensors off) ends `live` with a reason
+// instead of a calibration countdown that waits forever.
+TEST(Mocapctl, LiveOnASilentPortGivesUpWithAReason)
+{
+    int master = -1, slave = -1;
+    char name[256];
+    struct termios raw;
+    cfmakeraw(&raw);
+    ASSERT_EQ(openpty(&master, &slave, name, &raw, nullptr), 0);
+    close(slave);
+    CommandResult r = run_command(std::string("live --port ") + name + " --seconds 1");
+    close(master);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("no frame from the receiver"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--baud"), std::string::npos) << r.output;
+}
+
+// stdio reports a full disk only at flush and close: a CSV that did not reach the disk is a
+// failed command, not "wrote".
+TEST(Mocapctl, ACsvOnAFullDiskFailsTheReplay)
+{
+    std::string dir = test_temp_dir();
+    CommandResult synth = run_command("synth --out " + dir + "/c.cap --motion walk --seed 5");
+    ASSERT_EQ(synth.exit_code, 0) << synth.output;
+    CommandResult r = run_command("replay " + dir + "/c.cap --csv /dev/full");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("writing /dev/full failed"), std::string::npos) << r.output;
+}
+
 TEST(Mocapctl, LiveOnAWrongPortNamesIt)
 {
     CommandResult r = run_command("live --port /dev/ttyNOPE0 --seconds 1");

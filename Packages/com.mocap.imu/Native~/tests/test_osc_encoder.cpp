@@ -2,6 +2,8 @@
 // (padding, big-endian int32/float32/timetag, bundles with size-prefixed elements), and misuse.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <cstring>
 #include <vector>
 
@@ -85,6 +87,13 @@ TEST(OscEncoder, NegativeFloatsAndTimetagsAreBigEndian)
     // NTP epoch 1900: the Unix epoch is 2208988800 s = 0x83AA7E80 later; 0.5 s = 0x80000000.
     EXPECT_EQ(osc_timetag_from_unix(0.0), 0x83AA7E8000000000ull);
     EXPECT_EQ(osc_timetag_from_unix(0.5), 0x83AA7E8080000000ull);
+    // Era 1 starts 2^32 s after 1900 (Unix 2085978496, in 2036): the seconds field wraps to 0.
+    EXPECT_EQ(osc_timetag_from_unix(2085978496.5), 0x0000000080000000ull);
+    // Times with no meaning are sent as "immediately", never converted (undefined for huge values).
+    EXPECT_EQ(osc_timetag_from_unix(INFINITY), OSC_TIMETAG_IMMEDIATELY);
+    EXPECT_EQ(osc_timetag_from_unix(NAN), OSC_TIMETAG_IMMEDIATELY);
+    EXPECT_EQ(osc_timetag_from_unix(-1.0), OSC_TIMETAG_IMMEDIATELY);
+    EXPECT_EQ(osc_timetag_from_unix(1e30) >> 32 < 0x100000000ull, true);
 }
 
 TEST(OscEncoder, BundleWithSizePrefixedMessages)

@@ -351,7 +351,6 @@ TEST(Session, UnplugIsReportedWithinOneSecondAndReplugResumes)
     }));
     mocap_session_get_stats(session.s, &stats);
     EXPECT_NE(std::string(stats.last_error).find(receiver.link), std::string::npos) << stats.last_error;
-    EXPECT_NE(std::string(stats.last_error).find("(lost: "), std::string::npos) << stats.last_error;
 
     uint64_t before = stats.frames_emitted;
     {

@@ -26,6 +26,7 @@
  *   mocapctl model-info M.onnx
  *   mocapctl version
  */
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -106,6 +107,30 @@ static int arg_flag(int argc, char **argv, const char *name)
 static int fail(mocap_status st, const char *what)
 {
     fprintf(stderr, "mocapctl: %s: %s (%s)\n", what, mocap_last_error(), mocap_status_name(st));
+    return 1;
+}
+
+/* The engine's path fields hold MOCAP_PATH_MAX bytes: a longer path would be cut short and
+ * open (or, for a recording, overwrite) another file. 0 when it fits. */
+static int path_too_long(const char *path, const char *what)
+{
+    if (strlen(path) < MOCAP_PATH_MAX) return 0;
+    fprintf(stderr, "mocapctl: the %s path is %u bytes long; the engine takes at most %d: %s\n",
+            what, (unsigned)strlen(path), MOCAP_PATH_MAX - 1, path);
+    return 1;
+}
+
+/* Closes an output file (CSV, JSON lines) and says whether everything reached it: stdio reports
+ * a full disk only through ferror and fclose. 0 when complete; *f becomes NULL either way. */
+static int close_output(FILE **f, const char *path)
+{
+    if (!*f) return 0;
+    const int bad = ferror(*f) != 0;
+    const int close_failed = fclose(*f) != 0;
+    *f = NULL;
+    if (!bad && !close_failed) return 0;
+    fprintf(stderr, "mocapctl: writing %s failed (%s): the file is incomplete\n", path,
+            strerror(errno));
     return 1;
 }
 
@@ -276,7 +301,8 @@ static int truth_load(const char *path, truth_table *table)
             p = end;
             ++n;
         }
-        int ok = n == (int)(sizeof values / sizeof values[0]);
+        /* The phase becomes an int: only a small whole number may (a damaged row is skipped). */
+        int ok = n == (int)(sizeof values / sizeof values[0]) && values[1] >= -1e6 && values[1] <= 1e6;
         if (ok) {
             r->t = values[0];
             r->phase = (int)values[1];
@@ -482,6 +508,7 @@ static int open_replay_session(const char *capture, mocap_session_config *cfg, c
                                const char *cal_path, mocap_session **out)
 {
     double t0 = 0;
+    if (path_too_long(capture, "capture")) return 1;
     if (first_capture_time(capture, &t0) != 0) return 1;
     double heading_s = 3.0, strap_s = 2.0, tpose_s = 3.0;
     if (prelude && sscanf(prelude, "%lf,%lf,%lf", &heading_s, &strap_s, &tpose_s) != 3) {
@@ -600,6 +627,7 @@ static int cmd_replay(int argc, char **argv)
         printf("  bone orientation error against the generator's truth (motion phase): worst sensor "
                "mean %.3f deg\n", worst_mean);
     rc = replay_ended_early(st->session);
+    if (close_output(&st->csv, csv_path)) rc = 1;
 done:
     if (st->session) mocap_session_close(st->session);
     if (st->csv) fclose(st->csv);
@@ -734,7 +762,7 @@ static int pose_truth_load(const char *path, pose_truth *pt)
             p = end;
             ++n;
         }
-        if (n != POSE_TRUTH_COLS) continue;
+        if (n != POSE_TRUTH_COLS || !(v[1] >= -1e6 && v[1] <= 1e6)) continue; /* (int) below */
         if (pt->count == cap) {
             cap *= 2;
             pose_truth_row *g = (pose_truth_row *)realloc(pt->rows, cap * sizeof *g);
@@ -1223,8 +1251,16 @@ static int cmd_replay_pose(int argc, char **argv)
                out_path, bvh_order == BVH_ORDER_XYZ ? "XYZ" : "ZXY", (unsigned long long)written,
                info.frame_rate);
     }
-    if (json) printf("  wrote %s (one JSON object per pose)\n", json_path);
-    if (csv) printf("  wrote %s (one CSV line per pose)\n", csv_path);
+    if (json && close_output(&json, json_path)) {
+        rc = 1;
+        goto done;
+    }
+    if (json_path) printf("  wrote %s (one JSON object per pose)\n", json_path);
+    if (csv && close_output(&csv, csv_path)) {
+        rc = 1;
+        goto done;
+    }
+    if (csv_path) printf("  wrote %s (one CSV line per pose)\n", csv_path);
     if (truth.rows) metrics_print(metrics, truth_path);
     (void)in_motion;
     rc = (cal_failed || written == 0) ? 1 : 0;
@@ -1299,6 +1335,8 @@ static int open_live(int argc, char **argv, const char *record_path, float rate_
 {
     const char *port = arg_value(argc, argv, "--port");
     if (!port) return usage();
+    if (path_too_long(port, "port") || (record_path && path_too_long(record_path, "recording")))
+        return 2;
     const char *baud = arg_value(argc, argv, "--baud");
     mocap_session_config cfg;
     mocap_config_defaults(&cfg);
@@ -1413,6 +1451,12 @@ static int show_poses_until(mocap_session *session, mocap_model *model,
     return failed;
 }
 
+#define GUIDED_STEP_NO_FRAMES 2
+#define NO_FRAMES_LIMIT_S 5.0
+
+/* One calibration step with a countdown. 0 accepted, 1 refused or interrupted,
+ * GUIDED_STEP_NO_FRAMES when the receiver delivered nothing (the window only opens with the
+ * first frame, so without this a wrong port or baud rate would wait forever). */
 static int guided_step(mocap_session *session, int step, const char *instruction, float seconds)
 {
     printf("\n%s\n", instruction);
@@ -1424,10 +1468,22 @@ static int guided_step(mocap_session *session, int step, const char *instruction
     if (s != MOCAP_OK) return fail(s, "scheduling calibration");
     mocap_calibration_report rep;
     mocap_frame frame;
+    const int64_t waiting_since = mocap_monotonic_ns();
+    int have_frame = 0;
     for (;;) {
-        mocap_session_poll_latest(session, &frame);
+        if (mocap_session_poll_latest(session, &frame) == MOCAP_OK) have_frame = 1;
         mocap_calibration_get_report(session, &rep);
         if (rep.state == MOCAP_CALIBRATION_ACCEPTED || rep.state == MOCAP_CALIBRATION_REFUSED) break;
+        if (!have_frame && (double)(mocap_monotonic_ns() - waiting_since) * 1e-9 > NO_FRAMES_LIMIT_S) {
+            mocap_session_stats stats;
+            mocap_session_get_stats(session, &stats);
+            printf("\n");
+            fprintf(stderr, "mocapctl: no frame from the receiver in %.0f s (%llu bytes received%s%s): "
+                            "check the port, the baud rate (--baud) and that the sensors are on\n",
+                    NO_FRAMES_LIMIT_S, (unsigned long long)stats.bytes_received,
+                    stats.last_error[0] ? "; " : "", stats.last_error);
+            return GUIDED_STEP_NO_FRAMES;
+        }
         printf("\r  hold still: %.1f s  ", rep.seconds_remaining);
         fflush(stdout);
         if (interrupted) return 1;
@@ -1464,19 +1520,28 @@ static int cmd_live(int argc, char **argv)
         rc = guided_step(session, MOCAP_CALIBRATION_HEADING,
                          "Heading step: lay all six sensors still on a flat surface, X axis (the "
                          "arrow) pointing where you will face, Z up.", 3.0f);
-        if (rc == 0 || interrupted) break;
+        if (rc == 0 || rc == GUIDED_STEP_NO_FRAMES || interrupted) break;
     }
     for (int attempt = 0; rc == 0 && attempt < 3; ++attempt) {
         rc = guided_step(session, MOCAP_CALIBRATION_TPOSE,
                          "T-pose step: strap the sensors on (pelvis, wrists, shins, head), face the "
                          "same way, arms straight out to the sides, stand still.", 3.0f);
-        if (rc == 0 || interrupted) break;
+        if (rc == 0 || rc == GUIDED_STEP_NO_FRAMES || interrupted) break;
     }
     if (rc == 0) printf("\nCalibrated. Streaming; Ctrl-C to stop.\n");
-    if (rc == 0 && model) {
+    if (rc == GUIDED_STEP_NO_FRAMES) {
+        rc = 1; /* nothing arrives: showing an empty status would only wait */
+    } else if (rc == 0 && model) {
         rc = show_poses_until(session, model, &solver_config, limit);
     } else {
         show_status_until(session, limit);
+    }
+    /* A --record capture is complete only if the stop (last flush, close) says so. */
+    const mocap_status stopped = mocap_session_stop(session);
+    if (stopped != MOCAP_OK) {
+        fprintf(stderr, "\nmocapctl live: the recording failed (%s): %s\n",
+                mocap_status_name(stopped), mocap_last_error());
+        rc = 1;
     }
     mocap_session_close(session);
     mocap_model_close(model);
@@ -1663,6 +1728,9 @@ static int cmd_stream(int argc, char **argv)
         }
     }
     if (report_inference_failures(solver)) rc = 1;
+    /* A replay whose file stopped reading part way streamed less than the capture holds. */
+    for (int i = 0; !port && i < nrep; ++i)
+        if (replay_ended_early(sessions[i])) rc = 1;
 done:
     if (solver) mocap_solver_close(solver);
     for (int i = 0; i < STREAM_MAX; ++i) {
