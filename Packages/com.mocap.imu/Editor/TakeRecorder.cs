@@ -268,8 +268,16 @@ namespace Mocap.Imu.Editor
                 foreach (var recorder in Active.ToArray())
                 {
                     if (!recorder._hooked) continue;
-                    var result = recorder.Stop();
-                    Debug.Log($"Mocap take saved on leaving Play Mode: {result.ClipPath} ({result.Frames} frames)");
+                    // One take failing to save (a full disk) must not lose the others.
+                    try
+                    {
+                        var result = recorder.Stop();
+                        Debug.Log($"Mocap take saved on leaving Play Mode: {result.ClipPath} ({result.Frames} frames)");
+                    }
+                    catch (Exception e)
+                    {
+                        Debug.LogException(e);
+                    }
                 }
             };
         }

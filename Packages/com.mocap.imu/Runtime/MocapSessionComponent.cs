@@ -2,6 +2,7 @@ using System;
 using System.IO;
 using System.Threading.Tasks;
 using Mocap.Imu.Capture;
+using Mocap.Imu.Recording;
 using UnityEngine;
 
 namespace Mocap.Imu
@@ -178,9 +179,10 @@ namespace Mocap.Imu
         void OnApplicationQuit() => Close();
 
         /// <summary>Open everything on a worker thread (no-op while opening or running).</summary>
-        public void Open() => Open(null);
+        public void Open() => Open(null, null);
 
-        void Open(CalibrationData?[] carry)
+        // carriedFrom/carry: the configs and calibrations of the sessions a restart closed.
+        void Open(SessionConfig[] carriedFrom, CalibrationData?[] carry)
         {
             if (_opening != null || _engine != null) return;
             if (settings == null || settings.characters == null || settings.characters.Count == 0)
@@ -200,20 +202,24 @@ namespace Mocap.Imu
                     SolverConfig = settings.ToSolverConfig(),
                     Sources = settings.characters.ToArray(),
                     CapturePaths = new string[n],
-                    Calibrations = carry ?? new CalibrationData?[n],
                 };
                 if (_recording)
                 {
                     var folder = settings.ResolveRecordingFolder();
                     Directory.CreateDirectory(folder);
-                    string stamp = DateTime.Now.ToString("yyyyMMdd-HHmmss");
+                    // Never an existing name: the capture writer truncates the file it opens.
+                    var now = DateTime.Now;
+                    var previous = _recordingPaths;
                     for (int c = 0; c < n; c++)
-                        request.CapturePaths[c] = Path.Combine(folder, $"{stamp}-{c}-{Sanitize(request.Sources[c].name)}.cap");
+                        request.CapturePaths[c] = TakeNaming.CapturePath(folder, now, c, request.Sources[c].name,
+                            p => File.Exists(p) || Array.IndexOf(previous, p) >= 0 || Array.IndexOf(request.CapturePaths, p) >= 0);
                 }
                 _recordingPaths = request.CapturePaths;
                 request.Configs = new SessionConfig[n];
                 for (int c = 0; c < n; c++)
                     request.Configs[c] = request.Sources[c].ToSessionConfig(0f, request.CapturePaths[c]);
+                // Only to the same characters' same sensors (the list may have changed meanwhile).
+                request.Calibrations = CalibrationCarry.Match(carriedFrom, carry, request.Configs);
                 for (int c = 0; c < n; c++)
                     if (request.Calibrations[c] == null && !string.IsNullOrEmpty(request.Sources[c].calibrationFile))
                         request.Calibrations[c] = CalibrationData.Load(MocapSettings.ResolvePath(request.Sources[c].calibrationFile));
@@ -306,15 +312,21 @@ namespace Mocap.Imu
             }
         }
 
-        /// <summary>Close and open again, keeping each character's calibration.</summary>
+        /// <summary>
+        /// Close and open again, keeping each character's calibration (when the characters and
+        /// their sensors are the same as before).
+        /// </summary>
         public void Restart()
         {
             CalibrationData?[] carry = null;
+            SessionConfig[] carriedFrom = null;
             if (_engine != null)
             {
                 carry = new CalibrationData?[_engine.Sessions.Length];
+                carriedFrom = new SessionConfig[carry.Length];
                 for (int c = 0; c < carry.Length; c++)
                 {
+                    carriedFrom[c] = _engine.Sessions[c].Config;
                     try
                     {
                         var calibration = _engine.Sessions[c].Calibration;
@@ -324,7 +336,7 @@ namespace Mocap.Imu
                 }
             }
             Close();
-            Open(carry);
+            Open(carriedFrom, carry);
         }
 
         /// <summary>Record every character's raw sensor bytes (the engine's crash-safe capture format) from now on.</summary>
@@ -502,13 +514,6 @@ namespace Mocap.Imu
             status = MocapComponentStatus.Failed;
             lastError = message;
             Debug.LogError($"[Mocap IMU] {name}: {message}", this);
-        }
-
-        static string Sanitize(string s)
-        {
-            if (string.IsNullOrEmpty(s)) return "character";
-            foreach (char bad in Path.GetInvalidFileNameChars()) s = s.Replace(bad, '_');
-            return s.Replace(' ', '_');
         }
     }
 }

@@ -1,4 +1,5 @@
 using System;
+using System.Collections.Generic;
 using System.Runtime.InteropServices;
 
 namespace Mocap.Imu
@@ -199,5 +200,30 @@ namespace Mocap.Imu
 
         static void WriteMatrix(float* matrices, MocapSegment segment, in MocapMatrix3x3 value) =>
             *(MocapMatrix3x3*)(matrices + Index(segment) * 9) = value;
+    }
+
+    /// <summary>Which calibrations survive when a set of sessions is opened again.</summary>
+    public static class CalibrationCarry
+    {
+        /// <summary>
+        /// The calibration for each of <paramref name="next"/> taken from the sessions opened with
+        /// <paramref name="previous"/> (<paramref name="calibrations"/>[i] belongs to previous[i];
+        /// null = none). A calibration is carried only when the number of sessions is unchanged
+        /// and session i reads the same sensors as before (<see cref="SessionConfig.IsSameSource"/>):
+        /// after characters were added, removed or reordered, a calibration would belong to another
+        /// character's sensors. Always returns an array of next.Count entries.
+        /// </summary>
+        public static CalibrationData?[] Match(IReadOnlyList<SessionConfig> previous,
+                                              IReadOnlyList<CalibrationData?> calibrations,
+                                              IReadOnlyList<SessionConfig> next)
+        {
+            if (next == null) throw new ArgumentNullException(nameof(next));
+            var carried = new CalibrationData?[next.Count];
+            if (previous == null || calibrations == null) return carried;
+            if (previous.Count != next.Count || calibrations.Count != next.Count) return carried;
+            for (int i = 0; i < carried.Length; i++)
+                if (previous[i] != null && previous[i].IsSameSource(next[i])) carried[i] = calibrations[i];
+            return carried;
+        }
     }
 }

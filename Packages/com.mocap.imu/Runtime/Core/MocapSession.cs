@@ -21,7 +21,8 @@ namespace Mocap.Imu
     /// <para>Lifecycle: <see cref="Open"/> opens the source (errors name the port or file), then
     /// calibration may be loaded or scheduled, then <see cref="Start"/> runs the engine threads.
     /// <see cref="Stop"/> ends them; a later <see cref="Start"/> reopens the same source with the
-    /// calibration in use at the stop. <see cref="Dispose"/> frees everything.</para>
+    /// calibration in use at the stop (not for a session that records a capture: that Start
+    /// throws rather than overwrite the recording). <see cref="Dispose"/> frees everything.</para>
     /// <para>Threads: poll and drain from one thread (in Unity the main thread). Calibration,
     /// reports and statistics may be called from any thread. The engine never calls back into
     /// managed code, so no Unity code runs off the main thread.</para>
@@ -72,13 +73,22 @@ namespace Mocap.Imu
         public bool IsEndOfStream => _ended;
 
         /// <summary>Start the engine's reader and processing threads.</summary>
+        /// <exception cref="InvalidOperationException">A Start after <see cref="Stop"/> of a session
+        /// that records (<see cref="SessionConfig.CapturePath"/> set): reopening would overwrite
+        /// that capture. Open a new session with another CapturePath instead.</exception>
         public void Start()
         {
             ThrowIfDisposed();
             if (_running) return;
             if (_handle == null)
             {
-                // Restart after Stop: reopen the source and keep the calibration we had.
+                // Restart after Stop: reopen the source and keep the calibration we had. Not with
+                // a recording: reopening would start the capture writer on the same file again,
+                // and it truncates it, erasing what the first run recorded.
+                if (!string.IsNullOrEmpty(_config.CapturePath))
+                    throw new InvalidOperationException(
+                        $"the capture at {_config.CapturePath} would be overwritten: a session that records " +
+                        "cannot be started again; open a new session with another CapturePath");
                 var calibration = _stoppedCalibration;
                 var handle = OpenHandle(_config);
                 try

@@ -115,6 +115,23 @@ namespace Mocap.Imu
             };
         }
 
+        /// <summary>
+        /// Whether <paramref name="other"/> reads the same sensors: same source kind, port/path
+        /// (and HID ids) and node id per segment. Rates, filters, pacing and the capture path may
+        /// differ: a calibration made for one applies to the other.
+        /// </summary>
+        public bool IsSameSource(SessionConfig other)
+        {
+            if (other == null || other.Source != Source) return false;
+            if (!string.Equals(other.Path ?? string.Empty, Path ?? string.Empty, StringComparison.Ordinal)) return false;
+            if (Source == MocapSourceKind.Hid && (other.HidVendorId != HidVendorId || other.HidProductId != HidProductId))
+                return false;
+            if (other.NodeIds.Length != NodeIds.Length) return false;
+            for (int s = 0; s < NodeIds.Length; s++)
+                if (other.NodeIds[s] != NodeIds[s]) return false;
+            return true;
+        }
+
         /// <summary>A copy (sessions keep their own, so later edits do not affect them).</summary>
         public SessionConfig Clone() => new SessionConfig(this);
 

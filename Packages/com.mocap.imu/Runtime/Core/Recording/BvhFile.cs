@@ -225,9 +225,12 @@ namespace Mocap.Imu.Recording
             double frameTime = tokens.NextDouble("frame time");
             if (!(frameTime > 0) || double.IsInfinity(frameTime)) throw tokens.Error($"frame time {frameTime} must be positive");
 
-            // Motion: one line per frame, exactly `channels` numbers each.
-            var motion = new float[(long)frames * channels];
+            // Motion: one line per frame, exactly `channels` numbers each. The header's count is
+            // not trusted for the allocation: a damaged count (Frames: 100000000) would overflow or
+            // take gigabytes. The lines left bound the frames; too few are reported below.
             int line = tokens.NextLine;
+            long capacity = Math.Min(frames, Math.Max(0, lines.Length - line));
+            var motion = new float[capacity * channels];
             int frame = 0;
             for (; line < lines.Length && frame < frames; line++)
             {

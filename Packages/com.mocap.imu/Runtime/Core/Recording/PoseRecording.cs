@@ -109,7 +109,10 @@ namespace Mocap.Imu.Recording
                 throw Bad(path, $"truncated: {body % RecordSize} bytes of a partial pose after pose {whole}");
             if ((ulong)whole < count)
                 throw Bad(path, $"truncated: the header says {count} poses, the file holds {whole}");
-            if (whole > int.MaxValue) throw Bad(path, $"{whole} poses are more than one array holds");
+            // The poses are read as one span of bytes, which holds at most int.MaxValue of them.
+            if (whole > int.MaxValue / RecordSize)
+                throw Bad(path, $"{whole} poses ({body} bytes) are more than one recording read into memory holds " +
+                                $"(at most {int.MaxValue / RecordSize} poses)");
             var poses = new MocapPose[whole];
             if (!BitConverter.IsLittleEndian) throw new PlatformNotSupportedException("pose recordings need a little-endian CPU");
             // Records are mocap_pose's bytes: read them straight into the array.

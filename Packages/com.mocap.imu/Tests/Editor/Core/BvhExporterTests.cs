@@ -185,6 +185,81 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void PoseTakeKeepsThePosesOfARestartedEngine()
+        {
+            // Loop playback and a recording restart open a new engine, which numbers its poses
+            // from 0 again: the take keeps them as a new segment instead of dropping them.
+            MocapPose Numbered(int index, ulong sequence)
+            {
+                var pose = _poses[index];
+                pose.Sequence = sequence;
+                return pose;
+            }
+            var take = new PoseTake(_model.Info);
+            // The take begins mid-stream: engine poses 30..99.
+            for (int i = 30; i < 100; i++)
+            {
+                Assert.IsTrue(take.Add(Numbered(i, (ulong)i)));
+                Assert.IsFalse(take.Add(Numbered(i, (ulong)i)), "the latest pose handed in again is kept once");
+            }
+            Assert.IsFalse(take.Add(Numbered(95, 95)), "a pose a little older than the last is a duplicate");
+            Assert.AreEqual(1, take.Segments);
+            // The engine restarts: 0, 1, 2 ... again, for more than one second of frames.
+            int second = (int)Math.Ceiling(_model.Info.FrameRate) + 20;
+            Assert.Less(second, _poses.Count);
+            for (int i = 0; i < second; i++)
+            {
+                Assert.IsTrue(take.Add(Numbered(i, (ulong)i)), $"pose {i} after the restart is kept");
+                Assert.IsFalse(take.Add(Numbered(i, (ulong)i)));
+            }
+            Assert.IsFalse(take.Add(Numbered(second - 10, (ulong)second - 10)), "small duplicates within the new segment are still ignored");
+            Assert.AreEqual(2, take.Segments);
+            // A second restart, now below a segment that began at 0: the step back is larger than
+            // a late duplicate can be (one second of frames).
+            for (int i = 0; i < 10; i++) Assert.IsTrue(take.Add(Numbered(i, (ulong)i)), $"pose {i} after the second restart");
+            Assert.AreEqual(3, take.Segments);
+            Assert.AreEqual(70 + second + 10, take.Count);
+
+            double expected = (_poses[99].TimeSeconds - _poses[30].TimeSeconds) + (_poses[second - 1].TimeSeconds - _poses[0].TimeSeconds) +
+                              (_poses[9].TimeSeconds - _poses[0].TimeSeconds);
+            Assert.AreEqual(expected, take.DurationSeconds, 1e-9, "the segments' spans, summed");
+
+            var recording = take.ToRecording();
+            Assert.AreEqual(80 + second, recording.Poses.Length);
+            Assert.AreEqual(99ul, recording.Poses[69].Sequence, "the first segment, in order");
+            Assert.AreEqual(0ul, recording.Poses[70].Sequence, "then the restarted engine's poses");
+            Assert.AreEqual((ulong)second - 1, recording.Poses[69 + second].Sequence);
+            Assert.AreEqual(0ul, recording.Poses[70 + second].Sequence);
+
+            take.Clear();
+            Assert.AreEqual(0, take.Segments);
+            Assert.AreEqual(0, take.DurationSeconds);
+        }
+
+        [Test]
+        public void CaptureNamesNeverReuseAnExistingFile()
+        {
+            // The engine's capture writer truncates an existing file: two recordings started
+            // within one second (Start/Stop/Start, loop playback) must get different names.
+            var dir = TestPaths.NewTempDirectory("capnames");
+            var time = new DateTime(2024, 5, 1, 14, 3, 7, 123);
+            var first = TakeNaming.CapturePath(dir, time, 0, "Robot/1 A", File.Exists);
+            Assert.AreEqual(Path.Combine(dir, "20240501-140307-123-0-Robot_1_A.cap"), first);
+            File.WriteAllText(first, "first recording");
+            var later = TakeNaming.CapturePath(dir, time.AddMilliseconds(1), 0, "Robot/1 A", File.Exists);
+            Assert.AreEqual(Path.Combine(dir, "20240501-140307-124-0-Robot_1_A.cap"), later, "milliseconds tell them apart");
+            var same = TakeNaming.CapturePath(dir, time, 0, "Robot/1 A", File.Exists);
+            Assert.AreNotEqual(first, same, "the same millisecond gets a counter");
+            Assert.AreEqual(Path.Combine(dir, "20240501-140307-123-0-Robot_1_A-2.cap"), same);
+            File.WriteAllText(same, "second recording");
+            Assert.AreEqual(Path.Combine(dir, "20240501-140307-123-0-Robot_1_A-3.cap"),
+                            TakeNaming.CapturePath(dir, time, 0, "Robot/1 A", File.Exists));
+            Assert.AreEqual(Path.Combine(dir, "20240501-140307-123-1-character.cap"),
+                            TakeNaming.CapturePath(dir, time, 1, null, File.Exists));
+            Assert.AreEqual("first recording", File.ReadAllText(first));
+        }
+
+        [Test]
         public void TakeNamesAreTimestampedUniqueAndSafe()
         {
             var time = new DateTime(2024, 5, 1, 14, 3, 7);

@@ -133,6 +133,55 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void RestartCarriesCalibrationsOnlyToTheSameSensors()
+        {
+            // What MocapSessionComponent.Restart keeps: by character, only while the character
+            // list is unchanged and each character still reads the same sensors.
+            var headingOnly = default(CalibrationData);
+            headingOnly.HeadingMask = 0x3Fu;
+            SessionConfig Playback() => SessionConfig.Replay(_capture.CapturePath, realtime: true);
+            SessionConfig Port() => SessionConfig.Serial("/dev/ttyUSB7");
+            var before = new[] { Playback(), Port() };
+            var calibrations = new CalibrationData?[] { _calibration, headingOnly };
+
+            // Same characters; the rate, the pacing and the recording differ: carried.
+            var again = new[] { Playback(), Port() };
+            again[0].OutputRateHz = 30f;
+            again[0].ReplayRealtime = false;
+            again[1].CapturePath = Path.Combine(_dir, "now-recording.cap");
+            var carried = CalibrationCarry.Match(before, calibrations, again);
+            Assert.AreEqual(2, carried.Length);
+            Assert.IsTrue(carried[0].HasValue && SameBytes(_calibration, carried[0].Value));
+            Assert.AreEqual(0x3Fu, carried[1]?.HeadingMask);
+            using (var session = MocapSession.Open(again[0]))
+            {
+                session.Calibration = carried[0].Value;
+                Assert.AreEqual(0x3Fu, session.Calibration.ValidMask, "the carried calibration applies");
+            }
+
+            // A character added or removed: nothing is carried, and no index runs past the end.
+            carried = CalibrationCarry.Match(before, calibrations, new[] { Playback(), Port(), SessionConfig.Serial("COM9") });
+            Assert.AreEqual(3, carried.Length);
+            Assert.That(carried, Has.All.Null);
+            carried = CalibrationCarry.Match(before, calibrations, new[] { Port() });
+            Assert.AreEqual(1, carried.Length);
+            Assert.IsNull(carried[0], "the port's calibration does not move to index 0's old owner, nor the reverse");
+
+            // Reordered, or another sensor on a segment: not carried to the other sensors.
+            carried = CalibrationCarry.Match(before, calibrations, new[] { Port(), Playback() });
+            Assert.That(carried, Has.All.Null);
+            var rewired = new[] { Playback(), Port() };
+            rewired[1].NodeIds[(int)MocapSegment.Head] = 9;
+            carried = CalibrationCarry.Match(before, calibrations, rewired);
+            Assert.IsTrue(carried[0].HasValue, "the unchanged character keeps its calibration");
+            Assert.IsNull(carried[1], "new node ids are other sensors");
+            var otherPort = new[] { Playback(), SessionConfig.Serial("/dev/ttyUSB8") };
+            Assert.IsNull(CalibrationCarry.Match(before, calibrations, otherPort)[1]);
+
+            Assert.That(CalibrationCarry.Match(null, null, again), Has.Length.EqualTo(2).And.All.Null, "a first open carries nothing");
+        }
+
+        [Test]
         public void SavingIntoAMissingDirectoryFails()
         {
             var path = Path.Combine(_dir, "no-such-dir", "x.calibration");

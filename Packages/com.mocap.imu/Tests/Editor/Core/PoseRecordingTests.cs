@@ -249,6 +249,52 @@ Frame Time: 0.04
             Assert.AreEqual(MocapStatus.NotFound, e.Status);
         }
 
+        [Test]
+        public void BinaryRecordingTooLargeForMemoryIsAFormatError()
+        {
+            // Over 2 GiB of records cannot be read into one span: the reader must say so instead
+            // of allocating gigabytes and failing with an OverflowException. A sparse file makes
+            // the size without writing it.
+            if (Environment.OSVersion.Platform == PlatformID.Win32NT)
+                Assert.Ignore("needs a sparse file (NTFS would write the 2 GiB)");
+            var dir = TestPaths.NewTempDirectory("hugebin");
+            var path = Path.Combine(dir, "huge.mcpose");
+            new PoseRecording(_model.Info.FrameRate, _model.Info.Skeleton, _json.AsSpan(0, 1)).Save(path);
+            long records = int.MaxValue / PoseRecording.RecordSize + 1;
+            try
+            {
+                using (var stream = new FileStream(path, FileMode.Open, FileAccess.Write))
+                    stream.SetLength(PoseRecording.HeaderSize + records * PoseRecording.RecordSize);
+                long before = GC.GetAllocatedBytesForCurrentThread();
+                AssertFormat(() => PoseRecording.Load(path), path, $"{records} poses", "more than");
+                Assert.Less(GC.GetAllocatedBytesForCurrentThread() - before, 64L << 20, "nothing the size of the file was allocated");
+            }
+            finally
+            {
+                File.Delete(path);
+            }
+        }
+
+        [TestCase(false)]
+        [TestCase(true)]
+        public void BvhWithAHugeFrameCountIsAFormatError(bool engineBvh)
+        {
+            // A damaged "Frames:" must not size the motion array: 3 channels x 1e8 frames is 1.2 GB,
+            // the engine's 75 channels x 1e8 more than an array holds.
+            var dir = TestPaths.NewTempDirectory("hugebvh");
+            var path = Path.Combine(dir, "damaged.bvh");
+            string text = engineBvh
+                ? File.ReadAllText(TestPaths.ReplayPoses(_capture).BvhPath)
+                : "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n}\n" +
+                  "MOTION\nFrames: 2\nFrame Time: 0.1\n1 2 3\n4 5 6\n";
+            var damaged = Regex.Replace(text, @"Frames:\s*\d+", "Frames: 100000000");
+            Assert.AreNotEqual(text, damaged);
+            File.WriteAllText(path, damaged);
+            long before = GC.GetAllocatedBytesForCurrentThread();
+            AssertFormat(() => BvhFile.Load(path), path, "line ", "says 100000000 frames");
+            Assert.Less(GC.GetAllocatedBytesForCurrentThread() - before, 256L << 20, "the motion array follows the file, not the header");
+        }
+
         static string Write(string dir, string name, byte[] bytes)
         {
             var path = Path.Combine(dir, name + ".mcpose");

@@ -458,6 +458,34 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void StartAfterStopRefusesToOverwriteTheRecording()
+        {
+            // Reopening with the same CapturePath would truncate the first recording.
+            var copy = Path.Combine(TestPaths.NewTempDirectory("norestart"), "first.cap");
+            var config = SessionConfig.Replay(_capture.CapturePath);
+            config.CapturePath = copy;
+            using var session = MocapSession.Open(config);
+            session.Start();
+            var buffer = new MocapFrame[64];
+            var watch = Stopwatch.StartNew();
+            while (session.Drain(buffer, out _) != MocapPollResult.EndOfStream)
+                Assert.Less(watch.Elapsed.TotalSeconds, 60);
+            var final = session.Stop();
+            Assert.AreEqual(MocapStatus.Ok, final.CaptureError, final.LastError);
+            var recorded = File.ReadAllBytes(copy);
+            Assert.Greater(recorded.Length, 0);
+            Assert.AreEqual((ulong)recorded.Length, final.CaptureBytesWritten);
+
+            var e = Assert.Throws<InvalidOperationException>(() => session.Start());
+            StringAssert.Contains(copy, e.Message, "the message names the capture");
+            StringAssert.Contains("would be overwritten", e.Message);
+            StringAssert.Contains("another CapturePath", e.Message);
+            Assert.IsFalse(session.IsRunning);
+            CollectionAssert.AreEqual(recorded, File.ReadAllBytes(copy), "the first recording is intact");
+            Assert.AreEqual(final.CaptureBytesWritten, session.GetStats().CaptureBytesWritten, "the final stats are kept");
+        }
+
+        [Test]
         public void OpeningAMissingPortThrowsTheEngineText()
         {
             string port = Environment.OSVersion.Platform == PlatformID.Win32NT ? "COM243" : "/dev/ttyMOCAP-missing-42";
