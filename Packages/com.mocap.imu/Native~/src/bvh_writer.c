@@ -14,6 +14,7 @@
 #include "error.h"
 #include "platform.h"
 #include "mocap_math.h"
+#include "text_number.h"
 
 #define PI 3.14159265358979323846
 #define COUNT_WIDTH 12 /* digits reserved for "Frames: N" so it can be rewritten in place */
@@ -186,6 +187,15 @@ static void indent(FILE *f, int depth)
 }
 
 /* Writes joint j and its subtree; appends to file_order. */
+/* "OFFSET x y z" with '.' in any locale. */
+static void write_offset(FILE *f, double x, double y, double z)
+{
+    char line[128];
+    snprintf(line, sizeof line, "OFFSET %.6f %.6f %.6f\n", x, y, z);
+    text_use_dot(line, text_locale_point());
+    fputs(line, f);
+}
+
 static void write_joint(bvh_writer *w, int j, int depth, int *n)
 {
     FILE *f = w->file;
@@ -198,7 +208,7 @@ static void write_joint(bvh_writer *w, int j, int depth, int *n)
     indent(f, depth);
     fputs("{\n", f);
     indent(f, depth + 1);
-    fprintf(f, "OFFSET %.6f %.6f %.6f\n", sk->offsets[j][0], sk->offsets[j][1], sk->offsets[j][2]);
+    write_offset(f, sk->offsets[j][0], sk->offsets[j][1], sk->offsets[j][2]);
     indent(f, depth + 1);
     if (j == 0)
         fprintf(f, "CHANNELS 6 Xposition Yposition Zposition %s\n", rot_names[w->order]);
@@ -224,7 +234,7 @@ static void write_joint(bvh_writer *w, int j, int depth, int *n)
         indent(f, depth + 1);
         fputs("{\n", f);
         indent(f, depth + 2);
-        fprintf(f, "OFFSET %.6f %.6f %.6f\n", e[0], e[1], e[2]);
+        write_offset(f, e[0], e[1], e[2]);
         indent(f, depth + 1);
         fputs("}\n", f);
     }
@@ -299,7 +309,9 @@ mocap_status bvh_writer_open(const char *path, const bvh_skeleton *skeleton, dou
     fputs("MOTION\nFrames: ", w->file);
     w->count_offset = file_tell(w->file);
     fprintf(w->file, "%-*u\n", COUNT_WIDTH, 0u);
-    fprintf(w->file, "Frame Time: %.8f\n", frame_time_s);
+    char frame_time[64];
+    text_format_double(frame_time, sizeof frame_time, "Frame Time: %.8f\n", frame_time_s);
+    fputs(frame_time, w->file);
     if (n != skeleton->joint_count || ferror(w->file) || fflush(w->file) != 0 || w->count_offset < 0) {
         st = n != skeleton->joint_count
                  ? mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "bvh: skeleton is not one tree")
@@ -333,7 +345,7 @@ mocap_status bvh_writer_flush(bvh_writer *w)
 }
 
 /* "%.*f" without a "-0" and without trailing zeros (smaller files, same values). */
-static void put_number(FILE *f, double v, int decimals, int first)
+static void put_number(FILE *f, double v, int decimals, int first, char locale_point)
 {
     char buf[64];
     int len = snprintf(buf, sizeof buf, "%.*f", decimals, v);
@@ -341,6 +353,7 @@ static void put_number(FILE *f, double v, int decimals, int first)
         fputs(first ? "0" : " 0", f);
         return;
     }
+    text_use_dot(buf, locale_point); /* BVH wants '.', whatever the host's locale */
     char *dot = strchr(buf, '.');
     if (dot) {
         char *e = buf + len - 1;
@@ -371,15 +384,16 @@ mocap_status bvh_writer_append(bvh_writer *w, const float root_position[3],
     }
     w->have_previous = 1;
     FILE *f = w->file;
+    const char point = text_locale_point();
     for (int n = 0; n < J; ++n) {
         const int j = w->file_order[n];
         if (j == 0) {
             for (int k = 0; k < 3; ++k) {
                 double p = isfinite(root_position[k]) ? root_position[k] : 0.0;
-                put_number(f, p, 6, n == 0 && k == 0);
+                put_number(f, p, 6, n == 0 && k == 0, point);
             }
         }
-        for (int k = 0; k < 3; ++k) put_number(f, angles[j][k] * (180.0 / PI), 4, 0);
+        for (int k = 0; k < 3; ++k) put_number(f, angles[j][k] * (180.0 / PI), 4, 0, point);
     }
     fputc('\n', f);
     if (ferror(f)) return io_error(w, "writing");

@@ -14,6 +14,7 @@
 #include "error.h"
 #include "platform.h"
 #include "mocap_math.h"
+#include "text_number.h"
 
 #define ALL_SENSORS ((1u << MOCAP_SENSOR_COUNT) - 1u)
 #define KEPT_MAX 1024u
@@ -635,9 +636,12 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
                                                  : cal->sensor_to_bone[key->segment];
         int count = key->kind == KEY_VECTOR ? 3 : 9;
         ok = fprintf(f, "%s", key->name) > 0;
-        /* %.9g round-trips every float exactly. */
-        for (int i = 0; ok && i < count; i++)
-            ok = fprintf(f, " %.9g", (double)v[i]) > 0;
+        /* %.9g round-trips every float exactly; '.' in any locale. */
+        for (int i = 0; ok && i < count; i++) {
+            char number[40];
+            text_format_double(number, sizeof number, " %.9g", (double)v[i]);
+            ok = fputs(number, f) != EOF;
+        }
         ok = ok && fputc('\n', f) != EOF;
     }
     int err = errno;
@@ -676,7 +680,7 @@ static int parse_numbers(const char *s, double *out, int count)
     for (int i = 0; i < count; i++) {
         char *end;
         errno = 0;
-        double v = strtod(s, &end);
+        double v = text_strtod(s, &end);
         if (end == s || !isfinite(v) || fabs(v) > FLT_MAX)
             return 0;
         out[i] = v;

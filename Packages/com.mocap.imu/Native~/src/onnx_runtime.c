@@ -14,6 +14,7 @@
 
 #include "error.h"
 #include "platform.h"
+#include "text_number.h"
 
 void ort_options_defaults(ort_options *o)
 {
@@ -348,7 +349,7 @@ static int parse_double(const char *s, double *out)
 {
     char *end;
     if (!s || !*s) return 0;
-    double v = strtod(s, &end);
+    double v = text_strtod(s, &end); /* written with '.', read in any locale */
     while (isspace((unsigned char)*end)) ++end;
     if (*end || !isfinite(v)) return 0;
     *out = v;

@@ -17,6 +17,7 @@
 #include "error.h"
 #include "platform.h"
 #include "mocap_math.h"
+#include "text_number.h"
 
 /* ------------------------------------------------------------------------------------------ */
 /* Second-order jets                                                                           */
@@ -502,7 +503,7 @@ static int parse_line(char *line, double v[TRAJ_VALUES], char **bad)
         if (!*p) return n;
         if (n == TRAJ_VALUES) return TRAJ_VALUES + 1;
         char *end = NULL;
-        double x = strtod(p, &end);
+        double x = text_strtod(p, &end);
         if (end == p || !isfinite(x) ||
             (*end && *end != ' ' && *end != '\t' && *end != '\r' && *end != ',')) {
             *bad = p;
