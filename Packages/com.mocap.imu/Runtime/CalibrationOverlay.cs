@@ -82,6 +82,24 @@ namespace Mocap.Imu
             }
         }
 
+        // The "Session: ..." line while not running, rebuilt only when what it shows changes.
+        string _sessionLine;
+        MocapComponentStatus _sessionLineStatus;
+        string _sessionLineError;
+
+        string SessionLine(MocapSessionComponent component)
+        {
+            var status = component.Status;
+            var error = component.LastError;
+            if (_sessionLine == null || status != _sessionLineStatus || !ReferenceEquals(error, _sessionLineError))
+            {
+                _sessionLine = $"Session: {status} {error}";
+                _sessionLineStatus = status;
+                _sessionLineError = error;
+            }
+            return _sessionLine;
+        }
+
         void OnGUI()
         {
             if (!visible) return;
@@ -89,8 +107,7 @@ namespace Mocap.Imu
             GUILayout.Label(Title());
             if (session == null || session.Status != MocapComponentStatus.Running)
             {
-                GUILayout.Label(session == null ? "Assign a MocapSessionComponent."
-                    : $"Session: {session.Status} {session.LastError}");
+                GUILayout.Label(session == null ? "Assign a MocapSessionComponent." : SessionLine(session));
                 GUILayout.EndArea();
                 return;
             }

@@ -307,7 +307,10 @@ namespace Mocap.Imu
                 SetStatus(MocapComponentStatus.Idle, "");
             if (recordingFailure.Length > 0)
             {
-                lastError = recordingFailure;
+                // After a failure (the reason it closed) both messages matter.
+                lastError = status == MocapComponentStatus.Failed && lastError.Length > 0
+                    ? lastError + "\n" + recordingFailure
+                    : recordingFailure;
                 Debug.LogError($"[Mocap IMU] {name}: {recordingFailure}", this);
             }
         }

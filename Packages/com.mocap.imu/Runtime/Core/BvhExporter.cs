@@ -115,21 +115,48 @@ namespace Mocap.Imu.Recording
         /// <summary>
         /// Write a whole recording to <paramref name="path"/> and return the frame count. Poses
         /// keep the recording's order; its frame rate is the file's unless the options set one.
+        /// The engine writes a temporary file beside <paramref name="path"/>, which replaces it
+        /// only after the engine closed it without error: a failure leaves the previous file as it was.
         /// </summary>
+        /// <exception cref="MocapException">Writing or replacing failed (the text names <paramref name="path"/>).</exception>
         public static long Export(PoseRecording recording, string path, BvhExportOptions options = null)
         {
             if (recording == null) throw new ArgumentNullException(nameof(recording));
-            var exporter = Create(path, recording.FrameRate, recording.Skeleton, options, recording.ContractVersion);
+            if (path == null) throw new ArgumentNullException(nameof(path));
+            if (path.Length == 0) throw new ArgumentException("the BVH path is empty", nameof(path));
+            // The engine refuses paths of MOCAP_PATH_MAX (260) UTF-8 bytes or more.
+            string temporary = RecordingFiles.TemporaryPathFor(path, maxUtf8Bytes: 259);
+            bool replaced = false;
             try
             {
-                exporter.Append(recording.Poses);
+                long frames;
+                try
+                {
+                    var exporter = Create(temporary, recording.FrameRate, recording.Skeleton, options, recording.ContractVersion);
+                    try
+                    {
+                        exporter.Append(recording.Poses);
+                    }
+                    catch
+                    {
+                        exporter.CloseQuietly();
+                        throw;
+                    }
+                    frames = exporter.Close();
+                }
+                catch (MocapException e)
+                {
+                    // The engine's text names the temporary: name the file the caller asked for.
+                    throw new MocapException(e.Status, e.Message.Replace(temporary, path), e);
+                }
+                RecordingFiles.Replace(temporary, path, "BVH", syncFirst: true);
+                replaced = true;
+                return frames;
             }
-            catch
+            finally
             {
-                exporter.CloseQuietly();
-                throw;
+                if (!replaced) RecordingFiles.DeleteQuietly(temporary);
             }
-            return exporter.Close();
         }
 
         /// <summary>Append one pose (its root position and joint rotations) as one frame. Allocates nothing.</summary>

@@ -216,25 +216,47 @@ namespace Mocap.Imu
         {
             get
             {
-                switch (Phase)
+                // Cached: an overlay reads it several times per frame, and it changes only with
+                // the phase, the step, the countdown's second and the refusal reason.
+                int countdown = Phase == CalibrationFlowPhase.Countdown ? CountdownDisplay : 0;
+                if (_instruction == null || _instructionPhase != Phase || _instructionStep != CurrentStep ||
+                    _instructionCountdown != countdown || !ReferenceEquals(_instructionReason, Reason))
                 {
-                    case CalibrationFlowPhase.Idle:
-                        return "Press Calibrate to start: first the heading step (sensors lying on a table), then the T-pose step (sensors strapped on).";
-                    case CalibrationFlowPhase.Countdown:
-                        return Pose(CurrentStep) + $" Starting in {CountdownDisplay}...";
-                    case CalibrationFlowPhase.Collecting:
-                        return Hold(CurrentStep);
-                    case CalibrationFlowPhase.AwaitingTPose:
-                        return "Heading accepted. Strap the sensors on (pelvis, both wrists, both shins, head), then press Continue and stand in a T-pose.";
-                    case CalibrationFlowPhase.Refused:
-                        return $"{StepTitle(CurrentStep)} refused: {Reason} Fix it and press Retry.";
-                    case CalibrationFlowPhase.Complete:
-                        return CurrentStep == CalibrationStep.HeadingReset
-                            ? "Heading reset accepted: every bone faces forward again."
-                            : "Calibrated: every sensor has a heading and a mounting rotation.";
-                    default:
-                        return string.Empty;
+                    _instruction = BuildInstruction();
+                    _instructionPhase = Phase;
+                    _instructionStep = CurrentStep;
+                    _instructionCountdown = countdown;
+                    _instructionReason = Reason;
                 }
+                return _instruction;
+            }
+        }
+
+        string _instruction, _instructionReason;
+        CalibrationFlowPhase _instructionPhase;
+        CalibrationStep _instructionStep;
+        int _instructionCountdown;
+
+        string BuildInstruction()
+        {
+            switch (Phase)
+            {
+                case CalibrationFlowPhase.Idle:
+                    return "Press Calibrate to start: first the heading step (sensors lying on a table), then the T-pose step (sensors strapped on).";
+                case CalibrationFlowPhase.Countdown:
+                    return Pose(CurrentStep) + $" Starting in {CountdownDisplay}...";
+                case CalibrationFlowPhase.Collecting:
+                    return Hold(CurrentStep);
+                case CalibrationFlowPhase.AwaitingTPose:
+                    return "Heading accepted. Strap the sensors on (pelvis, both wrists, both shins, head), then press Continue and stand in a T-pose.";
+                case CalibrationFlowPhase.Refused:
+                    return $"{StepTitle(CurrentStep)} refused: {Reason} Fix it and press Retry.";
+                case CalibrationFlowPhase.Complete:
+                    return CurrentStep == CalibrationStep.HeadingReset
+                        ? "Heading reset accepted: every bone faces forward again."
+                        : "Calibrated: every sensor has a heading and a mounting rotation.";
+                default:
+                    return string.Empty;
             }
         }
 

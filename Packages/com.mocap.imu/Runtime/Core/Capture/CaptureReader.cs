@@ -7,6 +7,7 @@
 using System;
 using System.IO;
 using System.Text;
+using Mocap.Imu.Recording;
 
 namespace Mocap.Imu.Capture
 {
@@ -92,31 +93,22 @@ namespace Mocap.Imu.Capture
         bool _ended;
 
         /// <summary>Open a capture file.</summary>
-        /// <exception cref="MocapException">NotFound for a missing file; Format for a file that is
-        /// not a capture (the message names the file and the cause, as the engine's does).</exception>
+        /// <exception cref="MocapException">NotFound for a missing file, Permission or IO when it
+        /// cannot be opened or read; Format for a file that is not a capture (the message names the
+        /// file and the cause, as the engine's does).</exception>
         public CaptureReader(string path)
         {
             if (path == null) throw new ArgumentNullException(nameof(path));
             _name = path;
-            try
-            {
-                _stream = new FileStream(path, FileMode.Open, FileAccess.Read, FileShare.ReadWrite | FileShare.Delete);
-            }
-            catch (FileNotFoundException e)
-            {
-                throw new MocapException(MocapStatus.NotFound, $"capture file {path}: cannot open: no such file", e);
-            }
-            catch (DirectoryNotFoundException e)
-            {
-                throw new MocapException(MocapStatus.NotFound, $"capture file {path}: cannot open: no such directory", e);
-            }
-            catch (UnauthorizedAccessException e)
-            {
-                throw new MocapException(MocapStatus.Permission, $"capture file {path}: cannot open: permission denied", e);
-            }
+            _stream = RecordingFiles.OpenRead(path, "capture file", FileShare.ReadWrite | FileShare.Delete);
             try
             {
                 Header = ReadHeader();
+            }
+            catch (Exception e) when (RecordingFiles.IsFileError(e))
+            {
+                _stream.Dispose();
+                throw RecordingFiles.Failure(path, "capture file", "cannot read", e);
             }
             catch
             {

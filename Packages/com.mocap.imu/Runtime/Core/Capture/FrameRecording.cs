@@ -7,6 +7,8 @@ using System;
 using System.Collections.Generic;
 using System.Globalization;
 using System.IO;
+using System.Text;
+using Mocap.Imu.Recording;
 
 namespace Mocap.Imu.Capture
 {
@@ -20,18 +22,11 @@ namespace Mocap.Imu.Capture
         /// Read every frame of a recording. Fills sequence, time, flags, fresh mask (from the
         /// sensors' Held flag), bone orientation, bone acceleration and sensor flags.
         /// </summary>
-        /// <exception cref="MocapException">NotFound, or Format naming the file and line.</exception>
+        /// <exception cref="MocapException">NotFound, Permission or IO naming the file and the cause;
+        /// Format naming the file and line.</exception>
         public static MocapFrame[] Load(string path)
         {
-            string[] lines;
-            try
-            {
-                lines = File.ReadAllLines(path);
-            }
-            catch (Exception e) when (e is FileNotFoundException || e is DirectoryNotFoundException)
-            {
-                throw new MocapException(MocapStatus.NotFound, $"frame recording {path}: no such file", e);
-            }
+            string[] lines = RecordingFiles.ReadAllLines(path, "frame recording");
             var frames = new List<MocapFrame>(lines.Length);
             for (int i = 0; i < lines.Length; i++)
             {
@@ -43,32 +38,67 @@ namespace Mocap.Imu.Capture
             return frames.ToArray();
         }
 
-        /// <summary>Write frames in the same format (mocapctl's precision).</summary>
+        /// <summary>
+        /// Write frames in the same format (mocapctl's precision), replacing <paramref name="path"/>
+        /// only once every frame was written.
+        /// </summary>
+        /// <exception cref="MocapException">InvalidArgument for a frame holding NaN or infinity (which
+        /// <see cref="Load"/> would refuse); NotFound, Permission or IO when the file cannot be
+        /// written. The previous file is then unchanged.</exception>
         public static void Save(string path, ReadOnlySpan<MocapFrame> frames)
         {
-            using var writer = new StreamWriter(path, false);
-            writer.NewLine = "\n";
-            writer.Write("sequence,time_s,flags");
-            for (int s = 0; s < MocapSession.SensorCount; s++)
+            // A span cannot enter a lambda: the writer walks an array.
+            var all = frames.ToArray();
+            RecordingFiles.WriteReplacing(path, "frame recording", stream =>
             {
-                string n = SegmentNames[s];
-                writer.Write($",{n}_qw,{n}_qx,{n}_qy,{n}_qz,{n}_ax,{n}_ay,{n}_az,{n}_flags");
-            }
-            writer.WriteLine();
-            var c = CultureInfo.InvariantCulture;
-            foreach (ref readonly MocapFrame f in frames)
-            {
-                writer.Write(string.Format(c, "{0},{1:F6},{2}", f.Sequence, f.TimeSeconds, (uint)f.Flags));
+                // Not disposed: closing the stream is WriteReplacing's (and a failed flush here
+                // must not hide the exception that stopped the writing).
+                var writer = new StreamWriter(stream, new UTF8Encoding(false), 1 << 16) { NewLine = "\n" };
+                writer.Write("sequence,time_s,flags");
                 for (int s = 0; s < MocapSession.SensorCount; s++)
                 {
-                    var sf = f.GetSensor((MocapSegment)s);
-                    var q = sf.BoneOrientation;
-                    var a = sf.BoneAcceleration;
-                    writer.Write(string.Format(c, ",{0:F6},{1:F6},{2:F6},{3:F6},{4:F4},{5:F4},{6:F4},{7}",
-                        q.W, q.X, q.Y, q.Z, a.X, a.Y, a.Z, (uint)sf.Flags));
+                    string n = SegmentNames[s];
+                    writer.Write($",{n}_qw,{n}_qx,{n}_qy,{n}_qz,{n}_ax,{n}_ay,{n}_az,{n}_flags");
                 }
                 writer.WriteLine();
+                var c = CultureInfo.InvariantCulture;
+                for (int i = 0; i < all.Length; i++)
+                {
+                    ref readonly MocapFrame f = ref all[i];
+                    string field = FirstNonFinite(f);
+                    if (field != null)
+                        throw new MocapException(MocapStatus.InvalidArgument,
+                            $"frame recording {path}: frame {i}: {field} is not finite; nothing was written");
+                    writer.Write(string.Format(c, "{0},{1:F6},{2}", f.Sequence, f.TimeSeconds, (uint)f.Flags));
+                    for (int s = 0; s < MocapSession.SensorCount; s++)
+                    {
+                        var sf = f.GetSensor((MocapSegment)s);
+                        var q = sf.BoneOrientation;
+                        var a = sf.BoneAcceleration;
+                        writer.Write(string.Format(c, ",{0:F6},{1:F6},{2:F6},{3:F6},{4:F4},{5:F4},{6:F4},{7}",
+                            q.W, q.X, q.Y, q.Z, a.X, a.Y, a.Z, (uint)sf.Flags));
+                    }
+                    writer.WriteLine();
+                }
+                writer.Flush();
+            });
+        }
+
+        // The values the CSV holds that Load requires finite; null when all are.
+        static string FirstNonFinite(in MocapFrame frame)
+        {
+            if (!double.IsFinite(frame.TimeSeconds)) return "time";
+            for (int s = 0; s < MocapSession.SensorCount; s++)
+            {
+                var sensor = frame.GetSensor((MocapSegment)s);
+                var q = sensor.BoneOrientation;
+                var a = sensor.BoneAcceleration;
+                if (!float.IsFinite(q.W) || !float.IsFinite(q.X) || !float.IsFinite(q.Y) || !float.IsFinite(q.Z))
+                    return SegmentNames[s] + " orientation";
+                if (!float.IsFinite(a.X) || !float.IsFinite(a.Y) || !float.IsFinite(a.Z))
+                    return SegmentNames[s] + " acceleration";
             }
+            return null;
         }
 
         // The engine's segment names (mocap_segment_name), kept here so recordings need no engine.

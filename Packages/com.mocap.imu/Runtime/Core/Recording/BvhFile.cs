@@ -82,7 +82,7 @@ namespace Mocap.Imu.Recording
         public double FrameTime { get; }
 
         /// <summary>Read a BVH file.</summary>
-        /// <exception cref="MocapException">NotFound, or Format naming the file, line and problem.</exception>
+        /// <exception cref="MocapException">NotFound, Permission or IO naming the file and the cause; Format naming the file, line and problem.</exception>
         public static BvhFile Load(string path) => Parse(RecordingFiles.ReadAllLines(path, "BVH"), path);
 
         /// <summary>Parse BVH text; <paramref name="source"/> names it in errors.</summary>

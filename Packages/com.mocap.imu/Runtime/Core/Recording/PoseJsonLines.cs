@@ -19,7 +19,7 @@ namespace Mocap.Imu.Recording
     public static class PoseJsonLines
     {
         /// <summary>Read every pose of a file (blank lines and lines starting with '#' skipped).</summary>
-        /// <exception cref="MocapException">NotFound, or Format naming the file, line and problem.</exception>
+        /// <exception cref="MocapException">NotFound, Permission or IO naming the file and the cause; Format naming the file, line and problem.</exception>
         public static MocapPose[] Load(string path)
         {
             string[] lines = RecordingFiles.ReadAllLines(path, "pose JSON");
@@ -42,38 +42,62 @@ namespace Mocap.Imu.Recording
             return poses.ToArray();
         }
 
-        /// <summary>Write poses in the same format (numbers with the precision mocapctl prints, plus "character").</summary>
+        /// <summary>
+        /// Write poses in the same format (numbers with the precision mocapctl prints, plus
+        /// "character"), replacing <paramref name="path"/> only once every pose was written.
+        /// </summary>
+        /// <exception cref="MocapException">InvalidArgument for a pose holding NaN or infinity (which
+        /// <see cref="Load"/> would refuse); NotFound, Permission or IO when the file cannot be
+        /// written. The previous file is then unchanged.</exception>
         public static void Save(string path, ReadOnlySpan<MocapPose> poses)
         {
-            var text = new StringBuilder();
-            for (int i = 0; i < poses.Length; i++)
+            // A span cannot enter a lambda: the writer walks an array.
+            var all = poses.ToArray();
+            RecordingFiles.WriteReplacing(path, "pose JSON", stream =>
             {
-                var p = poses[i];
-                text.Append("{\"sequence\":").Append(p.Sequence.ToString(CultureInfo.InvariantCulture))
-                    .Append(",\"frame_sequence\":").Append(p.FrameSequence.ToString(CultureInfo.InvariantCulture))
-                    .Append(",\"time_s\":").Append(F(p.TimeSeconds, "F6"))
-                    .Append(",\"character\":").Append(p.Character.ToString(CultureInfo.InvariantCulture))
-                    .Append(",\"flags\":").Append(((uint)p.Flags).ToString(CultureInfo.InvariantCulture));
-                AppendVec(text, "root_position", p.RootPosition);
-                AppendVec(text, "root_velocity", p.RootVelocity);
-                text.Append(",\"foot_contact\":[").Append(F(p.LeftFootContact, "F4")).Append(',')
-                    .Append(F(p.RightFootContact, "F4")).Append("],\"joint_rotations\":[");
-                for (int j = 0; j < MocapPose.JointCount; j++)
+                // Not disposed: closing the stream is WriteReplacing's (and a failed flush here
+                // must not hide the exception that stopped the writing).
+                var writer = new StreamWriter(stream, new UTF8Encoding(false), 1 << 16) { NewLine = "\n" };
+                var text = new StringBuilder();
+                for (int i = 0; i < all.Length; i++)
                 {
-                    Quat q = p.GetJointRotation(j);
-                    text.Append(j > 0 ? ",[" : "[").Append(F(q.W, "F6")).Append(',').Append(F(q.X, "F6"))
-                        .Append(',').Append(F(q.Y, "F6")).Append(',').Append(F(q.Z, "F6")).Append(']');
+                    string field = PoseRecording.FirstNonFinite(all[i]);
+                    if (field != null)
+                        throw new MocapException(MocapStatus.InvalidArgument,
+                            $"pose JSON {path}: pose {i}: {field} is not finite; nothing was written");
+                    text.Clear();
+                    AppendLine(text, all[i]);
+                    writer.Write(text);
                 }
-                text.Append("],\"joint_positions\":[");
-                for (int j = 0; j < MocapPose.JointCount; j++)
-                {
-                    Vec3 v = p.GetJointPosition(j);
-                    text.Append(j > 0 ? ",[" : "[").Append(F(v.X, "F6")).Append(',').Append(F(v.Y, "F6"))
-                        .Append(',').Append(F(v.Z, "F6")).Append(']');
-                }
-                text.Append("]}\n");
+                writer.Flush();
+            });
+        }
+
+        static void AppendLine(StringBuilder text, in MocapPose p)
+        {
+            text.Append("{\"sequence\":").Append(p.Sequence.ToString(CultureInfo.InvariantCulture))
+                .Append(",\"frame_sequence\":").Append(p.FrameSequence.ToString(CultureInfo.InvariantCulture))
+                .Append(",\"time_s\":").Append(F(p.TimeSeconds, "F6"))
+                .Append(",\"character\":").Append(p.Character.ToString(CultureInfo.InvariantCulture))
+                .Append(",\"flags\":").Append(((uint)p.Flags).ToString(CultureInfo.InvariantCulture));
+            AppendVec(text, "root_position", p.RootPosition);
+            AppendVec(text, "root_velocity", p.RootVelocity);
+            text.Append(",\"foot_contact\":[").Append(F(p.LeftFootContact, "F4")).Append(',')
+                .Append(F(p.RightFootContact, "F4")).Append("],\"joint_rotations\":[");
+            for (int j = 0; j < MocapPose.JointCount; j++)
+            {
+                Quat q = p.GetJointRotation(j);
+                text.Append(j > 0 ? ",[" : "[").Append(F(q.W, "F6")).Append(',').Append(F(q.X, "F6"))
+                    .Append(',').Append(F(q.Y, "F6")).Append(',').Append(F(q.Z, "F6")).Append(']');
             }
-            File.WriteAllText(path, text.ToString());
+            text.Append("],\"joint_positions\":[");
+            for (int j = 0; j < MocapPose.JointCount; j++)
+            {
+                Vec3 v = p.GetJointPosition(j);
+                text.Append(j > 0 ? ",[" : "[").Append(F(v.X, "F6")).Append(',').Append(F(v.Y, "F6"))
+                    .Append(',').Append(F(v.Z, "F6")).Append(']');
+            }
+            text.Append("]}\n");
         }
 
         static void AppendVec(StringBuilder text, string key, Vec3 v) =>
@@ -87,8 +111,8 @@ namespace Mocap.Imu.Recording
             pose.Sequence = (ulong)Integer(o, "sequence");
             pose.FrameSequence = (ulong)Integer(o, "frame_sequence");
             pose.TimeSeconds = Number(o, "time_s");
-            pose.Flags = (MocapPoseFlags)(uint)Integer(o, "flags");
-            if (o.ContainsKey("character")) pose.Character = (int)Integer(o, "character");
+            pose.Flags = (MocapPoseFlags)(uint)Integer(o, "flags", uint.MaxValue);
+            if (o.ContainsKey("character")) pose.Character = (int)Integer(o, "character", int.MaxValue);
             pose.RootPosition = Vector(Array(o, "root_position", 3), "root_position");
             pose.RootVelocity = Vector(Array(o, "root_velocity", 3), "root_velocity");
             var contact = Array(o, "foot_contact", 2);
@@ -118,11 +142,15 @@ namespace Mocap.Imu.Recording
             return d;
         }
 
-        static long Integer(Dictionary<string, object> o, string key)
+        // A whole number from 0 to max (at most 2^53, where doubles stop holding every integer):
+        // flags and character have narrower fields, and a larger value must not wrap around.
+        static long Integer(Dictionary<string, object> o, string key, long max = 1L << 53)
         {
             double d = Number(o, key);
             if (d < 0 || d != Math.Floor(d) || d > 9007199254740992.0)
-                throw new FormatException($"\"{key}\" is {d}, not a non-negative integer");
+                throw new FormatException($"\"{key}\" is {d.ToString("R", CultureInfo.InvariantCulture)}, not a non-negative integer");
+            if (d > max)
+                throw new FormatException($"\"{key}\" is {d.ToString("R", CultureInfo.InvariantCulture)}, more than its largest value {max}");
             return (long)d;
         }
 
@@ -270,36 +298,6 @@ namespace Mocap.Imu.Recording
 
             FormatException Error(string what, int at = -1) =>
                 new FormatException($"{what} at column {(at < 0 ? _i : at) + 1}");
-        }
-    }
-
-    /// <summary>File reading shared by the recording readers: missing files become NotFound with the path.</summary>
-    internal static class RecordingFiles
-    {
-        internal static string[] ReadAllLines(string path, string what)
-        {
-            if (path == null) throw new ArgumentNullException(nameof(path));
-            try
-            {
-                return File.ReadAllLines(path);
-            }
-            catch (Exception e) when (e is FileNotFoundException || e is DirectoryNotFoundException)
-            {
-                throw new MocapException(MocapStatus.NotFound, $"{what} {path}: no such file", e);
-            }
-        }
-
-        internal static FileStream OpenRead(string path, string what)
-        {
-            if (path == null) throw new ArgumentNullException(nameof(path));
-            try
-            {
-                return new FileStream(path, FileMode.Open, FileAccess.Read, FileShare.ReadWrite);
-            }
-            catch (Exception e) when (e is FileNotFoundException || e is DirectoryNotFoundException)
-            {
-                throw new MocapException(MocapStatus.NotFound, $"{what} {path}: no such file", e);
-            }
         }
     }
 }

@@ -63,15 +63,33 @@ namespace Mocap.Imu.Recording
         /// <summary>The poses, in recorded order.</summary>
         public MocapPose[] Poses { get; }
 
-        /// <summary>Write the recording to <paramref name="path"/> (replacing it).</summary>
+        /// <summary>
+        /// Write the recording to <paramref name="path"/>, replacing the file only once every pose
+        /// was written (a temporary file beside it is renamed over it).
+        /// </summary>
+        /// <exception cref="MocapException">InvalidArgument for a pose holding NaN or infinity (which
+        /// <see cref="Load"/> would refuse); NotFound, Permission or IO when the file cannot be
+        /// written. The previous file is then unchanged.</exception>
         public void Save(string path)
         {
-            using var writer = PoseRecordingWriter.Create(path, FrameRate, Skeleton, ContractVersion);
-            writer.Append(Poses);
+            RecordingFiles.WriteReplacing(path, "pose recording", stream =>
+            {
+                // Not disposed: the stream is WriteReplacing's, which flushes and closes it.
+                var writer = PoseRecordingWriter.Start(stream, path, FrameRate, Skeleton, ContractVersion);
+                for (int i = 0; i < Poses.Length; i++)
+                {
+                    string field = FirstNonFinite(Poses[i]);
+                    if (field != null)
+                        throw new MocapException(MocapStatus.InvalidArgument,
+                            $"pose recording {path}: pose {i}: {field} is not finite; nothing was written");
+                    writer.Append(in Poses[i]);
+                }
+                writer.Flush();
+            });
         }
 
         /// <summary>Read a recording.</summary>
-        /// <exception cref="MocapException">NotFound, or Format naming the file and what is wrong.</exception>
+        /// <exception cref="MocapException">NotFound, Permission or IO naming the file and the cause; Format naming the file and what is wrong.</exception>
         public static PoseRecording Load(string path)
         {
             using var stream = RecordingFiles.OpenRead(path, "pose recording");
@@ -127,8 +145,8 @@ namespace Mocap.Imu.Recording
         }
 
         // The engine never writes NaN or infinity; a pose holding one comes from damage, and would
-        // reach Unity transforms (which reject it) or exported files.
-        static string FirstNonFinite(in MocapPose pose)
+        // reach Unity transforms (which reject it) or exported files. Null when all are finite.
+        internal static string FirstNonFinite(in MocapPose pose)
         {
             if (!double.IsFinite(pose.TimeSeconds)) return "time";
             if (!pose.RootPosition.IsFinite) return "root position";
@@ -164,14 +182,22 @@ namespace Mocap.Imu.Recording
     /// <summary>
     /// Streams poses into a binary pose recording as they are solved. <see cref="Append(in MocapPose)"/>
     /// allocates nothing, so it can run every frame; the pose count in the header is rewritten by
-    /// <see cref="Flush"/> and on <see cref="Dispose"/>.
+    /// <see cref="Flush"/> and on <see cref="Dispose"/>. The file is written in place, so a crash
+    /// leaves every flushed pose readable.
     /// </summary>
+    /// <remarks>
+    /// A failed write (disk full) is thrown by the call that met it, as a MocapException (IO)
+    /// naming the file; every later Append and Flush repeats it, and Dispose then only closes the
+    /// file, so the first failure is not replaced by a second one from Dispose's flush (for
+    /// example in a <c>using</c> block). Dispose after no failure reports a failure of its flush.
+    /// </remarks>
     public sealed class PoseRecordingWriter : IDisposable
     {
         readonly FileStream _stream;
         readonly string _path;
         ulong _count;
         bool _disposed;
+        MocapException _failure;
 
         PoseRecordingWriter(FileStream stream, string path)
         {
@@ -193,6 +219,22 @@ namespace Mocap.Imu.Recording
             if (skeleton == null) throw new ArgumentNullException(nameof(skeleton));
             if (!(frameRate > 0) || float.IsInfinity(frameRate))
                 throw new ArgumentOutOfRangeException(nameof(frameRate), frameRate, "must be positive");
+            FileStream stream;
+            try
+            {
+                stream = new FileStream(path, FileMode.Create, FileAccess.Write, FileShare.Read);
+            }
+            catch (Exception e) when (RecordingFiles.IsFileError(e))
+            {
+                throw RecordingFiles.Failure(path, "pose recording", "cannot create", e);
+            }
+            return Start(stream, path, frameRate, skeleton, contractVersion);
+        }
+
+        /// <summary>A writer over an open stream: writes the header (the stream stays the caller's to close).</summary>
+        internal static PoseRecordingWriter Start(FileStream stream, string path, float frameRate, SmplSkeleton skeleton,
+                                                  int contractVersion)
+        {
             if (!BitConverter.IsLittleEndian) throw new PlatformNotSupportedException("pose recordings need a little-endian CPU");
             var header = new byte[PoseRecording.HeaderSize];
             PoseRecording.Magic.CopyTo(header, 0);
@@ -208,17 +250,9 @@ namespace Mocap.Imu.Recording
                 WriteFloat(header, 44 + 12 * j, o.Y);
                 WriteFloat(header, 48 + 12 * j, o.Z);
             }
-            FileStream stream;
-            try
-            {
-                stream = new FileStream(path, FileMode.Create, FileAccess.Write, FileShare.Read);
-            }
-            catch (Exception e) when (e is DirectoryNotFoundException || e is UnauthorizedAccessException || e is IOException)
-            {
-                throw new MocapException(MocapStatus.IO, $"pose recording {path}: cannot create: {e.Message}", e);
-            }
-            stream.Write(header, 0, header.Length);
-            return new PoseRecordingWriter(stream, path);
+            var writer = new PoseRecordingWriter(stream, path);
+            writer.Write(header);
+            return writer;
         }
 
         /// <summary>Poses appended so far.</summary>
@@ -228,54 +262,104 @@ namespace Mocap.Imu.Recording
         public string Path => _path;
 
         /// <summary>Append one pose. Allocates nothing.</summary>
+        /// <exception cref="MocapException">IO: writing failed (now or before).</exception>
         public unsafe void Append(in MocapPose pose)
         {
-            ThrowIfDisposed();
+            ThrowIfUnusable();
             // A record is the pose's own bytes (see the format above).
             fixed (MocapPose* p = &pose)
-                _stream.Write(new ReadOnlySpan<byte>(p, sizeof(MocapPose)));
+                Write(new ReadOnlySpan<byte>(p, sizeof(MocapPose)));
             _count++;
         }
 
         /// <summary>Append poses in order. Allocates nothing.</summary>
+        /// <exception cref="MocapException">IO: writing failed (now or before).</exception>
         public void Append(ReadOnlySpan<MocapPose> poses)
         {
-            ThrowIfDisposed();
-            _stream.Write(MemoryMarshal.AsBytes(poses));
+            ThrowIfUnusable();
+            Write(MemoryMarshal.AsBytes(poses));
             _count += (ulong)poses.Length;
         }
 
         /// <summary>Write buffered poses and the pose count to disk.</summary>
+        /// <exception cref="MocapException">IO: writing failed (now or before).</exception>
         public void Flush()
         {
-            ThrowIfDisposed();
-            long end = _stream.Position;
-            Span<byte> count = stackalloc byte[8];
-            BinaryPrimitives.WriteUInt64LittleEndian(count, _count);
-            _stream.Position = 24;
-            _stream.Write(count);
-            _stream.Position = end;
-            _stream.Flush(flushToDisk: false);
+            ThrowIfUnusable();
+            try
+            {
+                long end = _stream.Position;
+                Span<byte> count = stackalloc byte[8];
+                BinaryPrimitives.WriteUInt64LittleEndian(count, _count);
+                _stream.Position = 24;
+                _stream.Write(count);
+                _stream.Position = end;
+                _stream.Flush(flushToDisk: false);
+            }
+            catch (Exception e) when (RecordingFiles.IsFileError(e))
+            {
+                throw Fail(e);
+            }
         }
 
-        /// <summary>Flush and close the file.</summary>
+        /// <summary>
+        /// Flush and close the file. After a failed Append or Flush (already thrown) it only
+        /// closes the file; otherwise a failure of the final flush is thrown once the file is closed.
+        /// </summary>
+        /// <exception cref="MocapException">IO: the final flush failed.</exception>
         public void Dispose()
         {
             if (_disposed) return;
+            MocapException failure = null;
+            if (_failure == null)
+            {
+                try
+                {
+                    Flush();
+                }
+                catch (MocapException e)
+                {
+                    failure = e;
+                }
+            }
+            _disposed = true;
             try
             {
-                Flush();
-            }
-            finally
-            {
-                _disposed = true;
                 _stream.Dispose();
+            }
+            catch (Exception e) when (RecordingFiles.IsFileError(e))
+            {
+                // Closing repeats a write failure already met (or met just above): report that one.
+                if (failure == null && _failure == null) failure = Fail(e);
+            }
+            if (failure != null) throw failure;
+        }
+
+        void Write(ReadOnlySpan<byte> bytes)
+        {
+            try
+            {
+                _stream.Write(bytes);
+            }
+            catch (Exception e) when (RecordingFiles.IsFileError(e))
+            {
+                throw Fail(e);
             }
         }
 
-        void ThrowIfDisposed()
+        MocapException Fail(Exception e)
+        {
+            _failure = RecordingFiles.Failure(_path, "pose recording", "cannot write", e);
+            return _failure;
+        }
+
+        void ThrowIfUnusable()
         {
             if (_disposed) throw new ObjectDisposedException(nameof(PoseRecordingWriter), _path);
+            // Nothing more is written after a failure: the file ends at a whole record or less.
+            if (_failure != null)
+                throw new MocapException(_failure.Status, $"pose recording {_path}: not writing since a write failed: {_failure.Message}",
+                                         _failure);
         }
 
         static void WriteFloat(byte[] b, int offset, float value) =>

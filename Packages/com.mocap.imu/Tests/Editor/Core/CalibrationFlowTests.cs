@@ -66,6 +66,35 @@ namespace Mocap.Imu.Tests
             CountdownSeconds = 3, HeadingSeconds = 2, TPoseSeconds = 1.5f, HeadingResetSeconds = 1, ResultTimeoutSeconds = 4,
         };
 
+        static int ReadInstruction(CalibrationFlow flow, int times)
+        {
+            int length = 0;
+            for (int i = 0; i < times; i++) length += flow.Instruction.Length;
+            return length;
+        }
+
+        [Test]
+        public void InstructionIsBuiltOnlyWhenItChanges()
+        {
+            // An overlay reads it several times per rendered frame: no string per read.
+            var flow = new CalibrationFlow(new ScriptedTarget(), Quick());
+            flow.StartFullCalibration(100.0);
+            var first = flow.Instruction;
+            Assert.AreSame(first, flow.Instruction);
+            int length = ReadInstruction(flow, 100);  // warm-up: JIT the loop and the getter
+            long before = GC.GetAllocatedBytesForCurrentThread();
+            length += ReadInstruction(flow, 1000);
+            // Into a local first: Assert's boxing of its arguments would count otherwise.
+            long allocated = GC.GetAllocatedBytesForCurrentThread() - before;
+            Assert.AreEqual(0, allocated, "bytes allocated by 1000 reads");
+            Assert.Greater(length, 0);
+            flow.Update(101.2);  // the countdown shows 2 now
+            StringAssert.Contains("Starting in 2", flow.Instruction);
+            Assert.AreNotSame(first, flow.Instruction);
+            flow.Cancel();
+            StringAssert.Contains("Press Calibrate", flow.Instruction);
+        }
+
         [Test]
         public void CountsDownThenCollectsEachStepAndWaitsForTheUserBetween()
         {
