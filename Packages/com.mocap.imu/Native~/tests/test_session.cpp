@@ -508,39 +508,31 @@ TEST(Session, DiskFullMidSessionStopsRecordingButNotTracking)
     auto packets = generate(cfg);
     std::string dir = test_temp_dir();
     std::string record = dir + "/limited.cap";
-    pid_t pid = fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        struct rlimit limit = {40000, 40000};
-        signal(SIGXFSZ, SIG_IGN);
-        if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(10);
+    const int code = exit_code_with_file_size_limit(40000, [&]() -> int {
         FakeReceiver receiver(dir + "/ttyLimited");
         mocap_session_config config = serial_config(receiver.link);
         snprintf(config.capture_path, sizeof config.capture_path, "%s", record.c_str());
         mocap_session *s = nullptr;
-        if (mocap_session_open(&config, &s) != MOCAP_OK) _exit(11);
-        if (mocap_session_start(s) != MOCAP_OK) _exit(12);
+        if (mocap_session_open(&config, &s) != MOCAP_OK) return 11;
+        if (mocap_session_start(s) != MOCAP_OK) return 12;
         for (size_t i = 0; i < packets.size(); ++i) {
-            if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) _exit(13);
+            if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) return 13;
             std::this_thread::sleep_for(std::chrono::milliseconds(2));
         }
         // A loaded machine (parallel suites) may lag behind the writer: wait for the samples.
         wait_for_samples(s, (packets.size() - 5) * 6);
         mocap_session_stats stats;
         mocap_session_get_stats(s, &stats);
-        int code = 0;
-        if (stats.capture_error != MOCAP_ERR_IO) code = 14;
-        else if (std::string(stats.last_error).find("limited.cap") == std::string::npos) code = 15;
-        else if (stats.samples_decoded < (packets.size() - 5) * 6) code = 16; // kept tracking
-        else if (stats.connection_state != MOCAP_CONNECTION_CONNECTED) code = 17;
+        int result = 0;
+        if (stats.capture_error != MOCAP_ERR_IO) result = 14;
+        else if (std::string(stats.last_error).find("limited.cap") == std::string::npos) result = 15;
+        else if (stats.samples_decoded < (packets.size() - 5) * 6) result = 16; // kept tracking
+        else if (stats.connection_state != MOCAP_CONNECTION_CONNECTED) result = 17;
         mocap_session_close(s);
-        _exit(code);
-    }
-    int status = 0;
-    ASSERT_EQ(waitpid(pid, &status, 0), pid);
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 0) << "14: no capture error, 15: file not named, "
-                                         "16: tracking stopped, 17: connection lost";
+        return result;
+    });
+    EXPECT_EQ(code, 0) << "14: no capture error, 15: file not named, 16: tracking stopped, "
+                          "17: connection lost";
     // What reached the disk is still a readable capture.
     capture_reader *reader = nullptr;
     ASSERT_EQ(capture_reader_open(record.c_str(), &reader), MOCAP_OK) << mocap_last_error();
@@ -608,40 +600,32 @@ TEST(Session, StopReturnsAFailedLastFlush)
     auto packets = generate(cfg);
     std::string dir = test_temp_dir();
     std::string record = dir + "/last.cap";
-    pid_t pid = fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        // Room for the file header (a few hundred bytes), not for the first chunk.
-        struct rlimit limit = {1024, 1024};
-        signal(SIGXFSZ, SIG_IGN);
-        if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(10);
+    // Room for the file header (a few hundred bytes), not for the first chunk.
+    const int code = exit_code_with_file_size_limit(1024, [&]() -> int {
         FakeReceiver receiver(dir + "/ttyLast");
         mocap_session_config config = serial_config(receiver.link);
         snprintf(config.capture_path, sizeof config.capture_path, "%s", record.c_str());
         mocap_session *s = nullptr;
-        if (mocap_session_open(&config, &s) != MOCAP_OK) _exit(11);
-        if (mocap_session_start(s) != MOCAP_OK) _exit(12);
+        if (mocap_session_open(&config, &s) != MOCAP_OK) return 11;
+        if (mocap_session_start(s) != MOCAP_OK) return 12;
         for (size_t i = 0; i < 10; ++i)
-            if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) _exit(13);
-        if (!wait_for_samples(s, 10 * 6)) _exit(14);
-        int code = 0;
+            if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) return 13;
+        if (!wait_for_samples(s, 10 * 6)) return 14;
+        int result = 0;
         const mocap_status stopped = mocap_session_stop(s);
         const std::string why = mocap_last_error();
         mocap_session_stats stats;
         mocap_session_get_stats(s, &stats);
-        if (stopped != MOCAP_ERR_IO) code = 15;
-        else if (why.find("last.cap") == std::string::npos) code = 16;
-        else if (stats.capture_error != MOCAP_ERR_IO) code = 17;
-        else if (mocap_session_stop(s) != MOCAP_ERR_IO) code = 18;  // the same answer again
-        else if (stats.capture_bytes_written > 1024) code = 19;
+        if (stopped != MOCAP_ERR_IO) result = 15;
+        else if (why.find("last.cap") == std::string::npos) result = 16;
+        else if (stats.capture_error != MOCAP_ERR_IO) result = 17;
+        else if (mocap_session_stop(s) != MOCAP_ERR_IO) result = 18;  // the same answer again
+        else if (stats.capture_bytes_written > 1024) result = 19;
         mocap_session_close(s);
-        _exit(code);
-    }
-    int status = 0;
-    ASSERT_EQ(waitpid(pid, &status, 0), pid);
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 0) << "15: stop said OK, 16: file not named, 17: stats disagree, "
-                                         "18: second stop differs, 19: size beyond the limit";
+        return result;
+    });
+    EXPECT_EQ(code, 0) << "15: stop said OK, 16: file not named, 17: stats disagree, "
+                          "18: second stop differs, 19: size beyond the limit";
 }
 
 // A replay that meets a long stretch of plausible fake chunk headers (tens of seconds of 64 KiB

@@ -199,6 +199,18 @@ std::string python_with_onnx()
     return "";
 }
 
+// The fixture models of make_onnx_fixtures.py written into dir; false (with a failure) if not.
+bool write_onnx_fixtures(const std::string &dir)
+{
+    std::string py = python_with_onnx();
+    EXPECT_FALSE(py.empty()) << "python3 with the onnx package is needed (python3-onnx)";
+    if (py.empty()) return false;
+    std::string cmd = "\"" + py + "\" \"" + (kTestsDir / "make_onnx_fixtures.py").string() + "\" \"" +
+                      dir + "\" >/dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return std::filesystem::exists(dir + "/valid.onnx");
+}
+
 void report_timing(mocap_solver *solver, const char *what)
 {
     mocap_solver_stats st;
@@ -262,11 +274,7 @@ TEST(Solver, WrongModelIsRefusedByNameAndTheProcessStaysUsable)
 {
     REQUIRE_ORT();
     std::string dir = test_temp_dir();
-    std::string py = python_with_onnx();
-    ASSERT_FALSE(py.empty()) << "python3 with the onnx package is needed (python3-onnx)";
-    std::string cmd = "\"" + py + "\" \"" + (kTestsDir / "make_onnx_fixtures.py").string() + "\" \"" +
-                      dir + "\" >/dev/null";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    ASSERT_TRUE(write_onnx_fixtures(dir));
     struct Case {
         const char *file, *mention;
     } cases[] = {{"wrong_version.onnx", "contract_version"},
@@ -608,11 +616,7 @@ TEST(Solver, InferenceFailuresAreCountedWithTheirCause)
 {
     REQUIRE_ORT();
     std::string dir = test_temp_dir();
-    std::string py = python_with_onnx();
-    ASSERT_FALSE(py.empty()) << "python3 with the onnx package is needed (python3-onnx)";
-    std::string cmd = "\"" + py + "\" \"" + (kTestsDir / "make_onnx_fixtures.py").string() + "\" \"" +
-                      dir + "\" >/dev/null";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    ASSERT_TRUE(write_onnx_fixtures(dir));
     Model model;
     ASSERT_EQ(open_model(dir + "/fails_on_impact.onnx", &model.m), MOCAP_OK) << mocap_last_error();
     std::string cap = dir + "/rate.cap";

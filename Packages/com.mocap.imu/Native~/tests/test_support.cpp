@@ -10,7 +10,10 @@
 #include <array>
 #include <cstdlib>
 
+#include <csignal>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <unistd.h>
 
@@ -91,4 +94,19 @@ std::string python_with_numpy()
     for (const auto &p : candidates)
         if (std::system(("\"" + p + "\" -c \"import numpy\" >/dev/null 2>&1").c_str()) == 0) return p;
     return "";
+}
+
+int exit_code_with_file_size_limit(uint64_t max_file_bytes, const std::function<int()> &child)
+{
+    pid_t pid = fork();
+    if (pid < 0) return -1;
+    if (pid == 0) {
+        struct rlimit limit = {(rlim_t)max_file_bytes, (rlim_t)max_file_bytes};
+        signal(SIGXFSZ, SIG_IGN);
+        if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(120);
+        _exit(child());
+    }
+    int status = 0;
+    if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status)) return -1;
+    return WEXITSTATUS(status) == 120 ? -1 : WEXITSTATUS(status);
 }

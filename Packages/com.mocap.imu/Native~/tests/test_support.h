@@ -1,6 +1,7 @@
 // Helpers shared by the GoogleTest suites.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,3 +21,9 @@ struct CommandResult {
 CommandResult run_shell(const std::string &cmd);
 // A Python that imports numpy: $MOCAP_PYTHON, /usr/bin/python3, then python3 on PATH; "" if none.
 std::string python_with_numpy();
+
+// Runs child in a forked process whose files may not grow past max_file_bytes (writes beyond
+// fail with EFBIG, as on a full disk; SIGXFSZ ignored) and returns its return value as the exit
+// code, or -1 when the fork or the limit failed or the child died. The child must not use gtest
+// assertions: it returns a code that says what went wrong.
+int exit_code_with_file_size_limit(uint64_t max_file_bytes, const std::function<int()> &child);

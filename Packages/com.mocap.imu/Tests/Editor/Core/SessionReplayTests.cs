@@ -431,14 +431,10 @@ namespace Mocap.Imu.Tests
             Assert.IsTrue(buffer[count - 1].IsCalibrated || !buffer[count - 1].IsComplete);
         }
 
-        [Test]
-        public void StopClosesTheRecordingAndReportsItsFinalSize()
+        // The capture replayed to its end while recording it again into copy, then stopped: Stop
+        // is where the last chunk is written and the file closed. Returns Stop's final stats.
+        MocapSessionStats RecordWholeReplay(MocapSession session)
         {
-            // A replay recorded again: Stop is where the last chunk is written and the file closed.
-            var copy = Path.Combine(TestPaths.NewTempDirectory("rerecord"), "copy.cap");
-            var config = SessionConfig.Replay(_capture.CapturePath);
-            config.CapturePath = copy;
-            using var session = MocapSession.Open(config);
             session.Start();
             var buffer = new MocapFrame[64];
             var watch = Stopwatch.StartNew();
@@ -446,6 +442,22 @@ namespace Mocap.Imu.Tests
                 Assert.Less(watch.Elapsed.TotalSeconds, 60);
             var final = session.Stop();
             Assert.AreEqual(MocapStatus.Ok, final.CaptureError, final.LastError);
+            return final;
+        }
+
+        MocapSession OpenRecordingReplay(string copy)
+        {
+            var config = SessionConfig.Replay(_capture.CapturePath);
+            config.CapturePath = copy;
+            return MocapSession.Open(config);
+        }
+
+        [Test]
+        public void StopClosesTheRecordingAndReportsItsFinalSize()
+        {
+            var copy = Path.Combine(TestPaths.NewTempDirectory("rerecord"), "copy.cap");
+            using var session = OpenRecordingReplay(copy);
+            var final = RecordWholeReplay(session);
             Assert.AreEqual((ulong)new FileInfo(copy).Length, final.CaptureBytesWritten,
                             "the final stats give the closed file's size");
             long original = 0, recorded = 0;
@@ -462,16 +474,8 @@ namespace Mocap.Imu.Tests
         {
             // Reopening with the same CapturePath would truncate the first recording.
             var copy = Path.Combine(TestPaths.NewTempDirectory("norestart"), "first.cap");
-            var config = SessionConfig.Replay(_capture.CapturePath);
-            config.CapturePath = copy;
-            using var session = MocapSession.Open(config);
-            session.Start();
-            var buffer = new MocapFrame[64];
-            var watch = Stopwatch.StartNew();
-            while (session.Drain(buffer, out _) != MocapPollResult.EndOfStream)
-                Assert.Less(watch.Elapsed.TotalSeconds, 60);
-            var final = session.Stop();
-            Assert.AreEqual(MocapStatus.Ok, final.CaptureError, final.LastError);
+            using var session = OpenRecordingReplay(copy);
+            var final = RecordWholeReplay(session);
             var recorded = File.ReadAllBytes(copy);
             Assert.Greater(recorded.Length, 0);
             Assert.AreEqual((ulong)recorded.Length, final.CaptureBytesWritten);
