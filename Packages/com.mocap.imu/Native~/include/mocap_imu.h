@@ -211,8 +211,9 @@ MOCAP_API mocap_status mocap_session_stop(mocap_session *session);
  * the handle is invalid. One thread, and no other call on this session may be in progress. */
 MOCAP_API void mocap_session_close(mocap_session *session);
 
-/* Copy the newest frame into *out. MOCAP_ERR_NO_DATA when no frame is newer than the one the
- * previous poll returned; MOCAP_ERR_END_OF_STREAM once a replay is finished and drained. A replay
+/* Copy the newest frame into *out (a live session keeps the 1024 frames nobody took: after a
+ * pause longer than that, the first poll returns the newest of those, and its time_s says how
+ * old it is). MOCAP_ERR_NO_DATA when no frame is newer than the one the previous poll returned; MOCAP_ERR_END_OF_STREAM once a replay is finished and drained. A replay
  * whose file stops reading (a removed drive) finishes there: END_OF_STREAM after the frames read
  * before the failure, and the stats' last_error names the file and the cause.
  * Consumer thread: one thread at a time polls/drains a session. */
@@ -239,7 +240,8 @@ typedef struct mocap_session_stats {
     uint64_t bytes_skipped;       /* garbage bytes discarded while resynchronising */
     uint64_t unknown_packets;     /* payloads with an unknown tag */
     uint64_t samples_decoded;     /* per-sensor samples (a 0x62 frame gives several) */
-    uint64_t samples_rejected;    /* NaN/Inf, zero or non-unit quaternions, unknown nodes */
+    uint64_t samples_rejected;    /* NaN/Inf, beyond any sensor's range, zero or non-unit
+                                     quaternions, unknown nodes, older than one already taken */
     uint64_t frames_emitted;
     uint64_t frames_dropped;      /* output frames lost because the consumer was too slow */
     uint64_t bytes_dropped;       /* input bytes lost because processing was too slow */
@@ -315,13 +317,17 @@ typedef struct mocap_calibration {
 
 /* Schedule a calibration step over the window [start_s, start_s + duration_s] of the session
  * clock (frame time). start_s < 0 means "from the next frame". Steps queue: one scheduled while
- * another is waiting or collecting starts after it (so a replay's heading and T-pose windows
- * can both be scheduled before mocap_session_start). Up to 8 steps wait; more gives
- * MOCAP_ERR_STATE. Calibration runs on the processing thread; poll the reports. Any thread. */
+ * another is waiting or collecting starts after it, with its whole duration, at its own start
+ * or when the one before finished, whichever is later (so a replay's heading and T-pose windows
+ * can both be scheduled before mocap_session_start). Besides the step in progress, up to 8 steps
+ * wait; more gives MOCAP_ERR_STATE. Calibration runs on the processing thread; poll the
+ * reports. Any thread. */
 MOCAP_API mocap_status mocap_calibration_schedule(mocap_session *session, int32_t step,
                                                   double start_s, float duration_s);
 
-/* The step collecting now, or else the last one that finished. Any thread. */
+/* The latest step: the one waiting or collecting now, or else the last one that finished. A
+ * step that starts replaces the previous result here, so with steps queued read each one's
+ * result with mocap_calibration_get_step_report. Any thread. */
 MOCAP_API mocap_status mocap_calibration_get_report(mocap_session *session,
                                                     mocap_calibration_report *out);
 /* The latest request of one step (mocap_calibration_step): waiting, collecting or its result.

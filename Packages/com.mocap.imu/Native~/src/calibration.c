@@ -577,35 +577,52 @@ static mocap_status open_failure(const char *path, const char *what, int err)
     return mocap_fail(st, "calibration file %s: cannot %s: %s", path, what, text);
 }
 
-mocap_status calib_save(const mocap_calibration *cal, const char *path)
+int calib_check(const mocap_calibration *cal, char *why, size_t cap)
 {
-    if (!cal || !path || !path[0])
-        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save: NULL calibration or path");
+    if ((cal->valid_mask & ~ALL_SENSORS) || (cal->heading_mask & ~ALL_SENSORS)) {
+        snprintf(why, cap, "masks 0x%x/0x%x name sensors beyond %d", (unsigned)cal->valid_mask,
+                 (unsigned)cal->heading_mask, MOCAP_SENSOR_COUNT);
+        return -1;
+    }
+    if (cal->valid_mask & ~cal->heading_mask) {
+        snprintf(why, cap, "valid_mask 0x%x has sensors without a heading (heading_mask 0x%x)",
+                 (unsigned)cal->valid_mask, (unsigned)cal->heading_mask);
+        return -1;
+    }
     file_key keys[FILE_KEY_COUNT];
     build_keys(keys);
-    if ((cal->valid_mask & ~ALL_SENSORS) || (cal->heading_mask & ~ALL_SENSORS))
-        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
-                          "calibration save %s: masks 0x%x/0x%x name sensors beyond %d", path,
-                          (unsigned)cal->valid_mask, (unsigned)cal->heading_mask,
-                          MOCAP_SENSOR_COUNT);
-    /* Refuse to write what calib_load would refuse to read. */
     for (int k = 0; k < FILE_KEY_COUNT; k++) {
         const file_key *key = &keys[k];
         if (key->kind == KEY_MATRIX) {
             const float *m = key->which == 0 ? cal->world_to_model[key->segment]
                                              : cal->sensor_to_bone[key->segment];
             double e = rotation_error(m);
-            if (!(e <= ORTHONORMAL_TOLERANCE))
-                return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
-                                  "calibration save %s: %s is not a rotation (error %g)", path,
-                                  key->name, e);
+            if (!(e <= ORTHONORMAL_TOLERANCE)) {
+                snprintf(why, cap, "%s is not a rotation (error %g)", key->name, e);
+                return -1;
+            }
         } else if (key->kind == KEY_VECTOR) {
-            for (int i = 0; i < 3; i++)
-                if (!isfinite(cal->acceleration_offset[key->segment][i]))
-                    return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
-                                      "calibration save %s: %s is not finite", path, key->name);
+            for (int i = 0; i < 3; i++) {
+                if (!isfinite(cal->acceleration_offset[key->segment][i])) {
+                    snprintf(why, cap, "%s is not finite", key->name);
+                    return -1;
+                }
+            }
         }
     }
+    return 0;
+}
+
+mocap_status calib_save(const mocap_calibration *cal, const char *path)
+{
+    if (!cal || !path || !path[0])
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save: NULL calibration or path");
+    file_key keys[FILE_KEY_COUNT];
+    build_keys(keys);
+    /* Refuse to write what calib_load would refuse to read. */
+    char why[160];
+    if (calib_check(cal, why, sizeof why) != 0)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save %s: %s", path, why);
 
     /* Write a sibling file and rename it over the target, so a crash or a full disk never
      * leaves a half-written calibration behind. */

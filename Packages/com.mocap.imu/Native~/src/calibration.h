@@ -61,6 +61,10 @@ void calib_identity(mocap_calibration *cal);
 void calib_apply(const mocap_calibration *cal, int32_t world_frame, const raw_frame *in,
                  mocap_frame *out);
 
+/* Whether cal is a calibration the engine can use and write: masks within the six sensors, a
+ * heading for every fully calibrated sensor, rotation matrices, finite offsets. 0, or -1 with
+ * the reason (naming the field) in why. */
+int calib_check(const mocap_calibration *cal, char *why, size_t cap);
 mocap_status calib_save(const mocap_calibration *cal, const char *path);
 mocap_status calib_load(const char *path, mocap_calibration *out);
 

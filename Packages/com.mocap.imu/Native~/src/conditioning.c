@@ -30,6 +30,14 @@ static int all_finite(const float *v, int n)
     return 1;
 }
 
+static int all_within(const float *v, int n, double limit)
+{
+    for (int i = 0; i < n; i++)
+        if (!(fabs((double)v[i]) <= limit))
+            return 0;
+    return 1;
+}
+
 int condition_sample(const hipnuc_sample *in, imu_sample *out)
 {
     const int has_quat = (in->fields & HIPNUC_FIELD_QUAT) != 0;
@@ -45,6 +53,10 @@ int condition_sample(const hipnuc_sample *in, imu_sample *out)
         return CONDITION_NOT_FINITE;
     if (!has_quat && !has_euler)
         return CONDITION_NO_ORIENTATION;
+    if ((has_acc && !all_within(in->acc_g, 3, CONDITION_MAX_ACC_G)) ||
+        (has_gyr && !all_within(in->gyr_dps, 3, CONDITION_MAX_GYR_DPS)) ||
+        (!has_quat && !all_within(in->euler_deg, 3, CONDITION_MAX_EULER_DEG)))
+        return CONDITION_OUT_OF_RANGE;
 
     double q[4];
     if (has_quat) {

@@ -12,6 +12,11 @@ extern "C" {
 
 /* A quaternion whose norm differs from 1 by more than this is rejected, not normalised. */
 #define CONDITION_QUAT_NORM_TOLERANCE 0.02
+/* Beyond any IMU's range (HiPNUC parts measure up to 16-32 g and 2000-4000 deg/s): a value
+ * past these is a damaged sample, and finite-but-huge values would become Inf in float outputs. */
+#define CONDITION_MAX_ACC_G 64.0
+#define CONDITION_MAX_GYR_DPS 10000.0
+#define CONDITION_MAX_EULER_DEG 3600.0
 
 /* Why a sample was rejected (0 = accepted). */
 enum {
@@ -19,7 +24,8 @@ enum {
     CONDITION_NOT_FINITE = 1,      /* NaN or Inf anywhere in the used fields */
     CONDITION_ZERO_QUATERNION = 2,
     CONDITION_NON_UNIT_QUATERNION = 3,
-    CONDITION_NO_ORIENTATION = 4   /* neither quaternion nor Euler angles present */
+    CONDITION_NO_ORIENTATION = 4,  /* neither quaternion nor Euler angles present */
+    CONDITION_OUT_OF_RANGE = 5     /* finite but beyond any sensor's range (see the limits) */
 };
 
 /* One sensor sample in SI units, on the session clock. */

@@ -75,6 +75,14 @@ void assembler_init(frame_assembler *a, double rate_hz, double hold_latency_s, d
     a->stale_after = stale_after_s > 0.0 ? stale_after_s : 0.0;
 }
 
+int assembler_is_newer(const frame_assembler *a, int segment, double t)
+{
+    if (segment < 0 || segment >= MOCAP_SENSOR_COUNT || !isfinite(t)) return 0;
+    const sensor_track *k = &a->tracks[segment];
+    const imu_sample *newest = track_newest(k);
+    return !newest || t > newest->t;
+}
+
 void assembler_push(frame_assembler *a, const imu_sample *s)
 {
     if (s->segment < 0 || s->segment >= MOCAP_SENSOR_COUNT || !isfinite(s->t))

@@ -52,6 +52,8 @@ typedef struct frame_assembler {
 void assembler_init(frame_assembler *a, double rate_hz, double hold_latency_s, double stale_after_s);
 /* Add a sample (s->segment in [0, MOCAP_SENSOR_COUNT), s->t increasing per sensor). */
 void assembler_push(frame_assembler *a, const imu_sample *s);
+/* Whether a sample of segment at time t would be taken (newer than the sensor's newest). */
+int assembler_is_newer(const frame_assembler *a, int segment, double t);
 /* Emit the next frame if it is due given the data so far and the current session time now_s:
  * due when every valid sensor has a sample at or after next_t, or when now_s >= next_t +
  * hold_latency and some sensor is not stale. A sensor stale for longer than stale_after since the

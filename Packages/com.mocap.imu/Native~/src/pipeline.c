@@ -59,6 +59,7 @@ void pipeline_init(pipeline *p, const mocap_session_config *config, pipeline_fra
     for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
         time_unwrapper_init(&p->unwrap[s]);
         clock_mapper_init(&p->clock[s]);
+        p->untimed_t[s] = -INFINITY;
         accel_kalman_init(&p->kalman[s], config->kalman_process_noise,
                           config->kalman_measurement_noise);
     }
@@ -87,12 +88,16 @@ static void begin_request(pipeline *p, const calibration_request *r)
     p->step_reports[r->step] = p->report;
 }
 
-static void start_next_request(pipeline *p)
+/* finished_t: the frame that ended the step before. A queued step whose window began before
+ * that starts there instead, with its whole duration (mocap_calibration_schedule: it "starts
+ * after it"); keeping its absolute window would shorten it or leave it no frame at all. */
+static void start_next_request(pipeline *p, double finished_t)
 {
     if (p->queued == 0) return;
     calibration_request next = p->queue[0];
     memmove(&p->queue[0], &p->queue[1], (p->queued - 1) * sizeof p->queue[0]);
     p->queued--;
+    if (next.start_s >= 0.0 && next.start_s < finished_t) next.start_s = finished_t;
     begin_request(p, &next);
 }
 
@@ -104,9 +109,12 @@ static void emit_due_frames(pipeline *p)
                 calib_finish(&p->calib, &p->calibration, &p->report);
                 if (p->report.step >= 0 && p->report.step <= MOCAP_CALIBRATION_HEADING_RESET)
                     p->step_reports[p->report.step] = p->report;
-                start_next_request(p);
+                start_next_request(p, p->raw.t);
             } else {
                 calib_progress(&p->calib, p->raw.t, &p->report);
+                /* The step's own report follows it through collecting, not just its result. */
+                if (p->report.step >= 0 && p->report.step <= MOCAP_CALIBRATION_HEADING_RESET)
+                    p->step_reports[p->report.step] = p->report;
             }
         }
         calib_apply(&p->calibration, p->config.world_frame, &p->raw, &p->out);
@@ -137,7 +145,17 @@ static void take_sample(pipeline *p, const hipnuc_sample *raw, double receive_s)
         double sensor_s = (double)time_unwrap_ms(&p->unwrap[segment], raw->time_ms) / 1000.0;
         s.t = clock_map(&p->clock[segment], sensor_s, receive_s);
     } else {
-        s.t = receive_s;
+        /* No sensor time (older chained packets): every sample of one read shares the read's
+         * receive time, and the assembler keeps only samples newer than the last. Spread them
+         * 0.1 ms apart so that a read holding several samples of a sensor loses none. */
+        s.t = receive_s > p->untimed_t[segment] ? receive_s : p->untimed_t[segment] + 1e-4;
+        p->untimed_t[segment] = s.t;
+    }
+    if (!assembler_is_newer(&p->assembler, segment, s.t)) {
+        /* A sample older than one already taken (a sensor clock that jumped back) would move
+         * the filter and the frames back in time: refused, and counted. */
+        p->counters.samples_rejected++;
+        return;
     }
     /* Filtering in the world frame keeps the filter's smoothness assumption true while the
      * sensor turns: in the sensor frame gravity would swing between axes. */

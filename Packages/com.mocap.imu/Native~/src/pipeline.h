@@ -43,6 +43,7 @@ typedef struct pipeline {
     hipnuc_decoder decoder;
     time_unwrapper unwrap[MOCAP_SENSOR_COUNT];
     clock_mapper clock[MOCAP_SENSOR_COUNT];
+    double untimed_t[MOCAP_SENSOR_COUNT]; /* last time given to a sample without a sensor time */
     accel_kalman kalman[MOCAP_SENSOR_COUNT];
     frame_assembler assembler;
     calib_accumulator calib;

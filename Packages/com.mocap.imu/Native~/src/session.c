@@ -337,7 +337,10 @@ static void processor_main(void *arg)
         last_snapshot_ns = now_ns;
         if (ended) {
             /* Let the frames that waited for late sensors out, then report the end. */
-            pipeline_finish(s->pipe, s->pipe->newest_receive_ns + 2000000000LL);
+            /* Saturating: a damaged capture can hold receive times next to INT64_MAX. */
+            const int64_t newest = s->pipe->newest_receive_ns;
+            pipeline_finish(s->pipe, newest > INT64_MAX - 2000000000LL ? INT64_MAX
+                                                                       : newest + 2000000000LL);
             publish_snapshots(s);
             mocap_atomic_store_int(&s->connection_state, MOCAP_CONNECTION_ENDED);
             break;
@@ -642,6 +645,11 @@ static mocap_status check_calibration(const mocap_calibration *cal)
     n = sizeof cal->acceleration_offset / sizeof(float);
     for (size_t i = 0; i < n; ++i)
         if (!isfinite(values[i])) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration has NaN/Inf");
+    /* What save and load accept, nothing else: a scaled matrix would flag frames calibrated
+     * while distorting every bone, and the calibration in use could not be saved. */
+    char why[160];
+    if (calib_check(cal, why, sizeof why) != 0)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration refused: %s", why);
     return MOCAP_OK;
 }
 

@@ -73,6 +73,35 @@ TEST(Conditioning, RejectsNonFiniteUsedFieldsOnly)
     EXPECT_EQ(condition_sample(&in, &out), CONDITION_NOT_FINITE);
 }
 
+// Finite but beyond any sensor's range: a damaged sample, refused before 1e38 g turns into
+// infinity in the float outputs or spikes the Kalman filter for many samples.
+TEST(Conditioning, RejectsValuesBeyondAnySensorsRange)
+{
+    imu_sample out;
+    hipnuc_sample in = quat_sample();
+    in.acc_g[0] = 1e38f;
+    EXPECT_EQ(condition_sample(&in, &out), CONDITION_OUT_OF_RANGE);
+    in = quat_sample();
+    in.acc_g[2] = -65.0f;
+    EXPECT_EQ(condition_sample(&in, &out), CONDITION_OUT_OF_RANGE);
+    in = quat_sample();
+    in.gyr_dps[1] = 12000.0f;
+    EXPECT_EQ(condition_sample(&in, &out), CONDITION_OUT_OF_RANGE);
+    in = quat_sample();
+    in.fields &= ~(uint32_t)HIPNUC_FIELD_QUAT;
+    in.euler_deg[0] = 1e20f;
+    EXPECT_EQ(condition_sample(&in, &out), CONDITION_OUT_OF_RANGE);
+    // A hard impact (32 g) and a fast spin (4000 deg/s) are real and pass.
+    in = quat_sample();
+    in.acc_g[0] = 32.0f;
+    in.gyr_dps[2] = -4000.0f;
+    EXPECT_EQ(condition_sample(&in, &out), CONDITION_OK);
+    // Fields that are not used still do not matter.
+    in = quat_sample();
+    in.euler_deg[0] = 1e30f;
+    EXPECT_EQ(condition_sample(&in, &out), CONDITION_OK);
+}
+
 TEST(Conditioning, QuaternionValidationAndNormalisation)
 {
     imu_sample out;

@@ -227,3 +227,67 @@ TEST(Pipeline, MissingSensorIsFlaggedAndNamed)
     EXPECT_GT(run.p->counters.unknown_nodes, 0u);
     for (int s = 0; s < MOCAP_SEGMENT_HEAD; ++s) EXPECT_TRUE(last.sensors[s].flags & MOCAP_SENSOR_VALID);
 }
+
+// Steps queue: one whose window began while the step before it was still collecting starts when
+// that one finishes and keeps its whole duration; its own report shows it collecting, not only
+// waiting and then its result.
+TEST(Pipeline, AQueuedStepStartsAfterTheOneBeforeAndKeepsItsDuration)
+{
+    synth_config cfg = base_config(41, MOCAP_WORLD_ENU);
+    cfg.motion_s = 1.0;
+    auto packets = generate(cfg);
+    PipelineRun run;
+    mocap_session_config config = default_config();
+    config.world_frame = cfg.world_frame;
+    pipeline_init(run.p.get(), &config, on_frame, &run);
+    const double t0 = synth_session_time(&cfg, 0.0);
+    // Two heading steps while the sensors lie still (0..3 s): the second window [1.0, 2.0]
+    // overlaps the first [0.5, 1.5].
+    ASSERT_EQ(pipeline_calibration_schedule(run.p.get(), MOCAP_CALIBRATION_HEADING, t0 + 0.5, 1.0f), MOCAP_OK);
+    ASSERT_EQ(pipeline_calibration_schedule(run.p.get(), MOCAP_CALIBRATION_HEADING, t0 + 1.0, 1.0f), MOCAP_OK);
+    int collecting_reports = 0, first_accepted = 0;
+    for (const auto &packet : packets) {
+        if (packet.info.dropped) continue;
+        pipeline_feed(run.p.get(), packet.bytes.data(), packet.bytes.size(), packet.info.receive_ns);
+        const mocap_calibration_report &now = run.p->step_reports[MOCAP_CALIBRATION_HEADING];
+        if (now.state == MOCAP_CALIBRATION_COLLECTING) ++collecting_reports;
+        if (run.p->calibration.heading_mask == 0x3F && !first_accepted) first_accepted = 1;
+    }
+    pipeline_finish(run.p.get(), packets.back().info.receive_ns + 2000000000LL);
+    EXPECT_TRUE(first_accepted);
+    const mocap_calibration_report &second = run.p->step_reports[MOCAP_CALIBRATION_HEADING];
+    ASSERT_EQ(second.state, MOCAP_CALIBRATION_ACCEPTED) << second.reason;
+    // The step's report followed it while it collected (each packet is one 100 Hz sample).
+    EXPECT_GT(collecting_reports, 100);
+    // A whole second at 60 Hz, not the half second left of its scheduled window.
+    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) EXPECT_GE(second.sensors[s].samples, 58u) << s;
+}
+
+// Older chained firmware sends no sensor time: the samples of one read share its receive time.
+// A read holding several samples of a sensor (USB latency, a late reader) must lose none.
+TEST(Pipeline, SamplesWithoutSensorTimeInOneReadAreAllKept)
+{
+    PipelineRun run;
+    mocap_session_config config = default_config();
+    pipeline_init(run.p.get(), &config, on_frame, &run);
+    int64_t receive_ns = 1000000000LL;
+    for (int read = 0; read < 20; ++read, receive_ns += 30000000LL) {
+        std::vector<uint8_t> bytes;
+        for (int k = 0; k < 3; ++k) {          // three samples of each sensor in this read
+            for (uint8_t node = 0; node < MOCAP_SENSOR_COUNT; ++node) {
+                uint8_t payload[2 + 1 + 16] = {HIPNUC_TAG_ID, node, HIPNUC_TAG_QUAT};
+                const float q[4] = {1.0f, 0.0f, 0.0f, 0.0f};
+                std::memcpy(payload + 3, q, sizeof q);
+                uint8_t frame[64];
+                size_t n = hipnuc_encode_frame(payload, sizeof payload, frame, sizeof frame);
+                ASSERT_GT(n, 0u);
+                bytes.insert(bytes.end(), frame, frame + n);
+            }
+        }
+        pipeline_feed(run.p.get(), bytes.data(), bytes.size(), receive_ns);
+    }
+    EXPECT_EQ(run.p->counters.samples_decoded, 20u * 3u * MOCAP_SENSOR_COUNT);
+    EXPECT_EQ(run.p->counters.samples_rejected, 0u);
+    EXPECT_EQ(run.p->assembler.out_of_order, 0u);
+    EXPECT_GT(run.frames.size(), 20u);  // 0.6 s at 60 Hz, less the hold at the end
+}

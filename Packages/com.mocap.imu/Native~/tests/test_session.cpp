@@ -21,6 +21,7 @@
 #include "test_support.h"
 
 extern "C" {
+#include "calibration.h"
 #include "capture_file.h"
 #include "hipnuc_decoder.h"
 #include "platform.h"
@@ -486,8 +487,22 @@ TEST(Session, RecordingToAFullDeviceFailsTheOpenClearly)
 // The disk filling up mid-session stops the recording with a clear error; tracking goes on.
 // A forked child gets a small file-size limit (the kernel's EFBIG stands in for ENOSPC) and
 // reports through its exit code.
-// Waits (up to 10 s) until the session has decoded `samples` samples: every byte written so far
-// went through the processing thread (and into the capture).
+// Waits (up to 10 s) until the session has decoded `frames` HiPNUC frames: every byte written
+// so far went through the processing thread (and into the capture). Samples are no measure of
+// that: a burst written faster than the sensor clock runs maps onto one instant, and the
+// assembler keeps one sample of it per sensor.
+bool wait_for_frames(mocap_session *s, uint64_t frames)
+{
+    for (int i = 0; i < 1000; ++i) {
+        mocap_session_stats stats;
+        mocap_session_get_stats(s, &stats);
+        if (stats.frames_decoded >= frames) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+}
+
+// Waits (up to 10 s) until the session has taken `samples` samples.
 bool wait_for_samples(mocap_session *s, uint64_t samples)
 {
     for (int i = 0; i < 1000; ++i) {
@@ -567,7 +582,7 @@ TEST(Session, StopFlushesTheCaptureAndReportsItsFinalSize)
         ASSERT_TRUE(receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size()));
         sent += packets[i].bytes.size();
     }
-    ASSERT_TRUE(wait_for_samples(session.s, 40 * 6));
+    ASSERT_TRUE(wait_for_frames(session.s, 40));
     ASSERT_EQ(mocap_session_stop(session.s), MOCAP_OK) << mocap_last_error();
     mocap_session_stats stats;
     ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
@@ -610,7 +625,7 @@ TEST(Session, StopReturnsAFailedLastFlush)
         if (mocap_session_start(s) != MOCAP_OK) return 12;
         for (size_t i = 0; i < 10; ++i)
             if (!receiver.write_all(packets[i].bytes.data(), packets[i].bytes.size())) return 13;
-        if (!wait_for_samples(s, 10 * 6)) return 14;
+        if (!wait_for_frames(s, 10)) return 14;
         int result = 0;
         const mocap_status stopped = mocap_session_stop(s);
         const std::string why = mocap_last_error();
@@ -669,6 +684,41 @@ TEST(Session, StopIsPromptWhileAReplaySkipsALongDamagedStretch)
     EXPECT_LT(seconds_since(t0), 2.0);
 }
 
+// A capture whose receive times sit next to INT64_MAX (damaged or hand-made) still replays to
+// its end: the end-of-stream arithmetic must not overflow (UBSan aborts on it).
+TEST(Session, ReplayWithReceiveTimesAtTheEndOfInt64Ends)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.motion_s = 0.5;
+    cfg.start_receive_ns = INT64_MAX - 60000000000LL;  // the capture ends ~50 s before the limit
+    auto packets = generate(cfg);
+    std::string path = test_temp_path("int64_end.cap");
+    capture_writer *w = nullptr;
+    ASSERT_EQ(capture_writer_open(path.c_str(), &w), MOCAP_OK) << mocap_last_error();
+    for (const auto &p : packets)
+        ASSERT_EQ(capture_writer_append(w, p.info.receive_ns, p.bytes.data(), p.bytes.size()), MOCAP_OK);
+    const uint8_t last = 0;
+    ASSERT_EQ(capture_writer_append(w, INT64_MAX - 1, &last, 1), MOCAP_OK);  // then one at the edge
+    ASSERT_EQ(capture_writer_close(w), MOCAP_OK);
+    mocap_session_config config = replay_config(path);
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+    std::vector<mocap_frame> buf(64);
+    mocap_status st = MOCAP_ERR_NO_DATA;
+    size_t frames = 0;
+    auto t0 = Clock::now();
+    while (st != MOCAP_ERR_END_OF_STREAM && seconds_since(t0) < 10.0) {
+        uint32_t n = 0;
+        st = mocap_session_drain(session.s, buf.data(), (uint32_t)buf.size(), &n);
+        frames += n;
+        if (st == MOCAP_ERR_NO_DATA) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    EXPECT_EQ(st, MOCAP_ERR_END_OF_STREAM);
+    EXPECT_GT(frames, 100u);
+}
+
 TEST(Session, StructLayoutTableMatchesTheHeader)
 {
     uint32_t n = 0;
@@ -689,6 +739,42 @@ TEST(Session, StructLayoutTableMatchesTheHeader)
 }
 
 // Up to 8 calibration steps may wait behind the one collecting; one more is refused clearly.
+// mocap_calibration_set takes what save and load take, nothing else: a scaled matrix would flag
+// every frame calibrated while distorting it, and the calibration in use could not be saved.
+TEST(Session, CalibrationSetRefusesWhatSaveAndLoadRefuse)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.motion_s = 1.0;
+    std::string capture = test_temp_path("set.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    mocap_session_config config = replay_config(capture);
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK);
+    static mocap_calibration good, bad;
+    calib_identity(&good);
+    good.valid_mask = good.heading_mask = 0x3F;
+    ASSERT_EQ(mocap_calibration_set(session.s, &good), MOCAP_OK) << mocap_last_error();
+
+    bad = good;
+    for (int i = 0; i < 9; ++i) bad.sensor_to_bone[2][i] *= 2.0f;  // scaled: not a rotation
+    EXPECT_EQ(mocap_calibration_set(session.s, &bad), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("not a rotation"), std::string::npos) << mocap_last_error();
+    bad = good;
+    bad.heading_mask = 0x1F;  // sensor 5 calibrated without a heading
+    EXPECT_EQ(mocap_calibration_set(session.s, &bad), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("without a heading"), std::string::npos) << mocap_last_error();
+    bad = good;
+    bad.valid_mask = bad.heading_mask = 0x7F;  // a seventh sensor
+    EXPECT_EQ(mocap_calibration_set(session.s, &bad), MOCAP_ERR_INVALID_ARGUMENT);
+
+    // The calibration in use is still the good one, and it saves.
+    static mocap_calibration now;
+    ASSERT_EQ(mocap_calibration_get(session.s, &now), MOCAP_OK);
+    EXPECT_EQ(std::memcmp(&now, &good, sizeof now), 0);
+    EXPECT_EQ(mocap_calibration_save(&now, test_temp_path("in_use.calibration").c_str()), MOCAP_OK) << mocap_last_error();
+}
+
 TEST(Session, CalibrationQueueHoldsEightWaitingSteps)
 {
     synth_config cfg;

@@ -237,7 +237,8 @@ namespace Mocap.Imu
         [NativeName("unknown_packets")] public ulong UnknownPackets;
         /// <summary>Per-sensor samples (a gateway frame gives several).</summary>
         [NativeName("samples_decoded")] public ulong SamplesDecoded;
-        /// <summary>NaN/Inf, zero or non-unit quaternions, unknown nodes.</summary>
+        /// <summary>NaN/Inf, beyond any sensor's range, zero or non-unit quaternions, unknown nodes,
+        /// older than a sample already taken.</summary>
         [NativeName("samples_rejected")] public ulong SamplesRejected;
         [NativeName("frames_emitted")] public ulong FramesEmitted;
         /// <summary>Output frames lost because the consumer polled too slowly.</summary>
