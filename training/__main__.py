@@ -51,13 +51,29 @@ def main(argv=None) -> int:
         print(f"training {args.command}: module training.{args._module} is not available ({m})",
               file=sys.stderr)
         return 2
-    from .bvh import BvhError
+    from .cli import check_inputs, one_line
     try:
+        check_inputs(args.command, args)
         return int(m.main(args) or 0)
-    except BvhError as e:
-        # a damaged file in the user's data is a message, not a traceback
-        print(f"training {args.command}: {e}", file=sys.stderr)
+    except _expected_errors() as e:
+        # bad input, a damaged or missing file, a failed check: a message, not a traceback
+        print(f"training {args.command}: {one_line(e)}", file=sys.stderr)
         return 1
+
+
+def _expected_errors() -> tuple:
+    """The failures main reports as one line: bad user input (cli.UsageError), failed checks
+    (cli.CommandError), damaged BVH files, file-system errors and ONNX Runtime refusing a model.
+    Everything else is a bug and keeps its traceback."""
+    from .bvh import BvhError
+    from .cli import CommandError
+    errors = [CommandError, BvhError, OSError]
+    try:
+        from .ort import OnnxRuntimeError
+        errors.append(OnnxRuntimeError)
+    except ImportError:
+        pass
+    return tuple(errors)
 
 
 if __name__ == "__main__":

@@ -6,7 +6,8 @@ Checkpoints fine-tuned from the same starting weights sit in one basin of the lo
 of their weights is itself a good network, often better than each: the averaging cancels part of
 the noise that each run's last steps leave in the weights. The result is one network of the same
 size and cost, written as a weights-only checkpoint (the form `export` and `evaluate` read).
-Only checkpoints of the same architecture (identical model config) can be averaged.
+Only checkpoints of the same architecture (identical model config apart from the training-only
+dropout) can be averaged; the result keeps the first checkpoint's config.
 """
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ from pathlib import Path
 
 import torch
 
-from .train import load_checkpoint_file
+from .model import ModelConfig
+from .train import atomic_torch_save, load_checkpoint_file
 
 
 def average_state_dicts(states: list, weights: list | None = None) -> dict:
@@ -55,16 +57,22 @@ def average_checkpoints(paths: list, out, weights: list | None = None) -> dict:
     cks = [load_checkpoint_file(p) for p in paths]
     config = cks[0]["config"]
     for p, ck in zip(paths[1:], cks[1:]):
-        if ck["config"] != config:
+        if _architecture(ck["config"]) != _architecture(config):
             raise ValueError(f"average: {p} is a different architecture from {paths[0]}")
     state = average_state_dicts([ck["model"] for ck in cks], weights)
     result = {"model": state, "config": config, "step": None, "best": None,
               "averaged_from": [str(p) for p in paths],
               "average_weights": list(weights) if weights else [1.0] * len(paths)}
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    torch.save(result, str(out))
+    atomic_torch_save(result, Path(out))
     return result
+
+
+def _architecture(config: dict) -> ModelConfig:
+    """What must agree between averaged networks: the model config without dropout (training
+    only; older configs without wrist_anchor read as "hand", as ModelConfig.from_dict does)."""
+    cfg = ModelConfig.from_dict(config)
+    cfg.dropout = 0.0
+    return cfg
 
 
 def main(args) -> int:

@@ -167,9 +167,12 @@ def load_torch_model(path, mirror: bool = False):
     import torch
     from .model import ModelConfig, PoseNet
     from .train import load_checkpoint_file
+    from .cli import UsageError
     ckpt = load_checkpoint_file(path)
     if isinstance(ckpt, torch.nn.Module):
         return ckpt.eval()
+    if not isinstance(ckpt, dict):
+        raise UsageError(f"{path} is not a pose model checkpoint (it holds a {type(ckpt).__name__})")
     cfg = ckpt.get("config") or ckpt.get("model_config") or {}
     if isinstance(cfg, dict):
         cfg = ModelConfig.from_dict(cfg)
@@ -179,7 +182,11 @@ def load_torch_model(path, mirror: bool = False):
         if isinstance(ckpt.get(key), dict):
             state = ckpt[key]
             break
-    net.load_state_dict(state if state is not None else ckpt)
+    try:
+        net.load_state_dict(state if state is not None else ckpt)
+    except RuntimeError as e:
+        raise UsageError(f"{path} does not hold the weights of its pose network ("
+                         f"{str(e).splitlines()[0]})") from e
     if mirror:
         from .model import MirrorEnsemble
         return MirrorEnsemble(net).eval()
@@ -490,7 +497,8 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
     rng = np.random.default_rng(seed)
     clips = [synthesize_clip(m, rng, wrist) for m in motions]
     if not clips:
-        raise ValueError("no motions to evaluate")
+        from .cli import UsageError
+        raise UsageError("no motions to evaluate")
     preds = {"baseline": [predict_baseline(c, wrist) for c in clips]}
     params = None
     if checkpoint:
@@ -573,10 +581,11 @@ def _trim(motions, max_clips, max_seconds):
 
 def add_arguments(p):
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--split", default="val", help="train / val / test of the CMU data (default val)")
+    src.add_argument("--split", default="val", choices=["train", "val", "test"],
+                     help="train / val / test of the CMU data (default val)")
     src.add_argument("--bvh", help="a folder of BVH files instead (any depth; manifest.csv honoured)")
-    p.add_argument("--models", nargs="*", default=[str(m) for m in DEFAULT_MODELS],
-                   help="ONNX models (default: the shipped fp32 and fp16)")
+    p.add_argument("--models", nargs="*", default=None,
+                   help="ONNX models (default: the shipped fp32 and fp16, where present)")
     p.add_argument("--checkpoint", default=None, help="PyTorch checkpoint (default: the first that exists "
                    "of " + ", ".join(CHECKPOINT_CANDIDATES) + ")")
     p.add_argument("--no-torch", action="store_true", help="skip the PyTorch model")
@@ -614,7 +623,8 @@ def main(args=None) -> int:
     ckpt = None if args.no_torch else (args.checkpoint or find_checkpoint())
     if not args.no_torch and ckpt is None:
         print("evaluate: no checkpoint found; PyTorch skipped")
-    r = evaluate(motions, args.models, ckpt, args.out, args.seed, not args.no_latency,
+    models = [str(m) for m in DEFAULT_MODELS] if args.models is None else args.models
+    r = evaluate(motions, models, ckpt, args.out, args.seed, not args.no_latency,
                  source=f"{'BVH folder ' if args.bvh else 'split '}{source}",
                  mirror=not getattr(args, "no_mirror", False),
                  wrist=getattr(args, "wrist_sensor", None) or expected_wrist_sensor(ckpt))

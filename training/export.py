@@ -8,6 +8,13 @@ float32 (weight compression only: compute stays float32, which ONNX Runtime's CP
 requires). Dynamic B and T axes, opset 14, the contract's names and metadata. The files are
 validated with onnx.checker and, where ONNX Runtime is available (training/ort.py, the real C
 library), compared with PyTorch on procedural fixtures: whole clip and streaming T = 1.
+
+Both files are written as temporaries in DIR, checked, and only then moved over the previous
+files (os.replace): an interrupted export or a failed check leaves the previous models in place.
+The check fails (ExportCheckError; `python3 -m training export` exits 1) when the maximum
+absolute difference of joint_rotations exceeds CHECK_TOLERANCE (fp32 vs PyTorch and fp32
+streaming T = 1 vs one whole-clip call: 1e-4; fp16 vs PyTorch: 2e-3, ten times the 2e-4 the
+shipped model shows, see training/README.md).
 """
 from __future__ import annotations
 
@@ -19,6 +26,7 @@ import numpy as np
 import torch
 
 from . import skeleton as sk
+from .cli import CommandError, UsageError
 from .model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters
 
 REPO = Path(__file__).resolve().parents[1]
@@ -30,6 +38,16 @@ INPUT_NAMES = ["imu_orientation", "imu_acceleration", "state_in_h", "state_in_c"
 OUTPUT_NAMES = ["joint_rotations", "root_velocity", "foot_contact", "state_out_h", "state_out_c"]
 FP32_NAME = "mocap_pose_fp32.onnx"
 FP16_NAME = "mocap_pose_fp16.onnx"
+# Largest accepted max |ONNX Runtime - PyTorch| of joint_rotations per file (export check). fp32
+# differs by float rounding only (shipped model: 3e-7); fp16 weights move the outputs more
+# (shipped model: 1.9e-4 joint_rotations), so 2e-3 leaves a 10x margin and still catches a
+# broken conversion. "stream" is the fp32 file streamed T = 1 against one whole-clip call.
+CHECK_TOLERANCE = {"fp32": 1e-4, "fp16": 2e-3, "stream": 1e-4}
+CHECKED_OUTPUT = "joint_rotations"
+
+
+class ExportCheckError(CommandError):
+    """The exported files do not reproduce PyTorch within CHECK_TOLERANCE (none were installed)."""
 
 
 def _fmt(x: float) -> str:
@@ -139,12 +157,9 @@ def convert_fp16(src, dst) -> dict:
 
 
 def load_checkpoint(path) -> tuple:
-    from .train import load_checkpoint_file
+    from .train import checkpoint_network, load_checkpoint_file
     ck = load_checkpoint_file(path)
-    cfg = ModelConfig.from_dict(ck["config"])
-    net = PoseNet(cfg)
-    net.load_state_dict(ck["model"])
-    return net.eval(), ck
+    return checkpoint_network(ck, path).eval(), ck
 
 
 def untrained_model(seed: int = 0, config: ModelConfig | None = None) -> PoseNet:
@@ -193,20 +208,49 @@ def check_against_torch(net: PoseNet, paths: dict, ori=None, acc=None, stream_fr
     return report
 
 
+def check_failures(report: dict) -> list:
+    """The entries of a check_against_torch report over CHECK_TOLERANCE, as text."""
+    keys = {"fp32": "fp32", "fp16": "fp16", "stream_vs_whole_fp32": "stream"}
+    out = []
+    for tag, limit_key in keys.items():
+        if tag in report:
+            diff = report[tag][CHECKED_OUTPUT]
+            if not diff <= CHECK_TOLERANCE[limit_key]:   # NaN fails too
+                out.append(f"{tag} {CHECKED_OUTPUT} differ by {diff:.3g} > {CHECK_TOLERANCE[limit_key]:g}")
+    return out
+
+
 def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True) -> dict:
+    """Write out_dir/FP32_NAME and FP16_NAME: both as temporaries beside them, checked (check and
+    ONNX Runtime available), then moved over the previous files. A failed check raises
+    ExportCheckError and leaves the previous files untouched."""
     out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
     p32, p16 = out_dir / FP32_NAME, out_dir / FP16_NAME
-    export_fp32(net, p32, model_name)
-    convert_fp16(p32, p16)
-    info = {"fp32": str(p32), "fp16": str(p16), "fp32_bytes": p32.stat().st_size,
-            "fp16_bytes": p16.stat().st_size, "parameters": count_parameters(net),
-            "state_layers": net.state_layers, "state_size": net.state_size}
-    if check:
-        from . import ort
-        if ort.onnx_runtime_available():
-            info["check"] = check_against_torch(net, {"fp32": p32, "fp16": p16})
-        else:
-            info["check"] = "skipped: ONNX Runtime not available (scripts/fetch_onnxruntime.sh)"
+    tag = f"{os.getpid()}.tmp.onnx"   # ".onnx" last: tools that look at the suffix still load it
+    t32, t16 = out_dir / f".{FP32_NAME}.{tag}", out_dir / f".{FP16_NAME}.{tag}"
+    try:
+        export_fp32(net, t32, model_name)
+        convert_fp16(t32, t16)
+        info = {"fp32": str(p32), "fp16": str(p16), "fp32_bytes": t32.stat().st_size,
+                "fp16_bytes": t16.stat().st_size, "parameters": count_parameters(net),
+                "state_layers": net.state_layers, "state_size": net.state_size}
+        if check:
+            from . import ort
+            if ort.onnx_runtime_available():
+                info["check"] = check_against_torch(net, {"fp32": t32, "fp16": t16})
+                failed = check_failures(info["check"])
+                if failed:
+                    raise ExportCheckError(
+                        "ONNX Runtime does not reproduce PyTorch: " + "; ".join(failed)
+                        + f"; nothing written ({p32.name} and {p16.name} left as they were)")
+            else:
+                info["check"] = "skipped: ONNX Runtime not available (scripts/fetch_onnxruntime.sh)"
+        os.replace(t32, p32)
+        os.replace(t16, p16)
+    finally:
+        for t in (t32, t16):
+            t.unlink(missing_ok=True)
     return info
 
 
@@ -217,9 +261,8 @@ def main(args) -> int:
     else:
         ckpt = Path(getattr(args, "checkpoint", None) or DEFAULT_CHECKPOINT)
         if not ckpt.is_file():
-            print(f"export: no checkpoint at {ckpt} (train first; re-export the shipped weights with "
-                  f"--checkpoint training/checkpoints/mocap_pose.pt; or pass --untrained)")
-            return 2
+            raise UsageError(f"no checkpoint at {ckpt} (train first; re-export the shipped weights "
+                             f"with --checkpoint training/checkpoints/mocap_pose.pt; or pass --untrained)")
         net, ck = load_checkpoint(ckpt)
         name = f"mocap-pose lstm{net.state_layers}x{net.state_size}"
         if not getattr(args, "no_mirror", False):

@@ -174,15 +174,30 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
     """Write CAPTURE, its sensor truth CSV and the pose truth .npz; returns a dict of paths and
     facts. `motion` (a Motion) replaces reading bvh_path when given."""
     from .ort import mocapctl_path
+    from .cli import UsageError
     out = Path(out)
     truth = Path(truth) if truth else out.with_suffix(".truth.npz")
+    if truth.suffix != ".npz":   # np.savez would append it: name the file it really writes
+        truth = truth.with_name(truth.name + ".npz")
     sensor_truth = Path(sensor_truth) if sensor_truth else out.with_suffix(".sensors.csv")
     truth_csv = Path(truth_csv) if truth_csv else out.with_suffix(".truth.csv")
     if motion is None:
         from .bvh import read_bvh
         from .retarget import to_smpl_motion
+        from .retarget import detect_source
         name = Path(bvh_path).stem
-        motion = to_smpl_motion(read_bvh(bvh_path), name=name)
+        if not Path(bvh_path).is_file():
+            raise UsageError(f"{bvh_path}: no such BVH file")
+        clip = read_bvh(bvh_path)
+        if clip.num_frames == 0:
+            raise UsageError(f"{bvh_path}: the BVH file has no frames")
+        try:
+            detect_source(clip.joints)
+        except ValueError as e:
+            raise UsageError(f"{bvh_path}: {e}") from e
+        motion = to_smpl_motion(clip, name=name)
+    if motion.num_frames == 0:
+        raise UsageError(f"{bvh_path}: the clip is shorter than one frame at {sk.MODEL_FPS} Hz")
     full = with_lead_in(motion, lead_in)
     ori, acc = sensor_signals(full)
     t, quats, acc100 = resample_signals(ori, acc, full.fps)

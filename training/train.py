@@ -22,9 +22,12 @@ predicted rotations on the sample's own skeleton), root velocity (MSE, m/s), roo
 (displacement error accumulated over 1 s inside the window), foot contact (BCE on logits).
 
 Schedule: Adam, warm-up then cosine decay over a step count fixed at the start (measured speed
-x budget, or --steps) so resumed runs continue the same schedule. Seeded; fp32 on CPU and CUDA
-(TF32 disabled). Checkpoints in training/data/checkpoints (last.pt, best.pt by validation loss),
-log training/results/train_log.json, curves training/results/loss.png.
+x budget, or --steps) so resumed runs continue the same schedule. --resume needs last.pt and
+continues with the options saved in it (resume_config: only budget, steps, device and the output
+folders may change; a contradicting option is refused, the network is never switched over
+again). Seeded; fp32 on CPU and CUDA (TF32 disabled). Checkpoints in training/data/checkpoints
+(last.pt, best.pt by validation loss), log training/results/train_log.json, curves
+training/results/loss.png.
 """
 from __future__ import annotations
 
@@ -40,6 +43,7 @@ import torch
 import torch.nn.functional as F
 
 from . import skeleton as sk
+from .cli import UsageError
 from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch
 from .synthesis import Augmentation, synthesize, vary_motion
 
@@ -81,7 +85,8 @@ class TrainConfig:
     val_max_frames: int = 1800
     max_clips: int | None = None      # use only the first N training clips (quick runs)
     train_source: str = "train"       # split name or BVH folder
-    val_source: str = "val"
+    val_source: str | None = "val"   # split name or BVH folder; None: a share of train_source
+                                      # held out (holdout_validation)
     smoke: bool = False
     resume: bool = False
     init_from: str | None = None      # start from these weights (fresh optimizer and schedule)
@@ -127,7 +132,7 @@ class StreamBatcher:
                  augment: Augmentation | None = Augmentation(), wrist: str = "hand"):
         self.motions = [m for m in motions if m.num_frames >= window + 1]
         if not self.motions:
-            raise ValueError(f"no motion has more than {window} frames")
+            raise UsageError(f"no training clip has more than {window} frames (60 Hz)")
         lengths = np.array([m.num_frames for m in self.motions], dtype=np.float64)
         self.p = lengths / lengths.sum()
         self.total_frames = int(lengths.sum())
@@ -179,12 +184,55 @@ def load_data(cfg: TrainConfig) -> tuple:
         return _procedural_motions(5, 4.0, cfg.seed), _procedural_motions(2, 4.0, cfg.seed + 100)
     from . import dataset
     train = dataset.load_motions(cfg.train_source, progress=cfg.progress)
+    if cfg.val_source is None:
+        train, val, how = holdout_validation(train)
+        print(f"train: validation on {how} of {cfg.train_source}, held out of training "
+              f"({len(train)} training clips)")
+    else:
+        val = dataset.load_motions(cfg.val_source, progress=cfg.progress)
     if cfg.max_clips:
         rng = np.random.default_rng(cfg.seed)
         idx = rng.permutation(len(train))[:cfg.max_clips]
         train = [train[i] for i in sorted(idx)]
-    val = dataset.load_motions(cfg.val_source, progress=cfg.progress)
     return train, val
+
+
+VAL_SHARE = 0.1
+
+
+def _spread(n: int, share: float) -> list:
+    """Evenly spaced indices of about share * n of n items (at least one, never all)."""
+    k = min(max(1, round(n * share)), n - 1)
+    return sorted({int((i + 0.5) * n / k) for i in range(k)})
+
+
+def holdout_validation(motions, share: float = VAL_SHARE) -> tuple:
+    """(training motions, validation motions, description) of one folder's clips, deterministic.
+    By subject when every clip has a subject number (a manifest, or CMU-style NN_MM file names)
+    and there are two or more: the CMU rule of dataset.split_of (canonical subject % 10 == 1;
+    the test subjects stay in training: this is a validation split only), or where that holds out
+    no subject or every subject, every 10th subject in number order. Otherwise by clip: every
+    10th clip in folder order. At least one clip stays in training; a single clip has no
+    validation."""
+    motions = list(motions)
+    if len(motions) < 2:
+        return motions, [], "no clips (fewer than 2 in the folder)"
+    subjects = sorted({int(m.subject) for m in motions})
+    if len(subjects) >= 2 and all(int(m.subject) > 0 for m in motions):
+        from .dataset import split_of
+        held = [s for s in subjects if split_of(s) == "val"]
+        rule = "CMU validation subjects"
+        if not held or len(held) == len(subjects):
+            held = [subjects[i] for i in _spread(len(subjects), share)]
+            rule = "every 10th subject"
+        val = [m for m in motions if int(m.subject) in held]
+        train = [m for m in motions if int(m.subject) not in held]
+        return train, val, f"{len(val)} clips of subjects {', '.join(map(str, held))} ({rule})"
+    idx = set(_spread(len(motions), share))
+    val = [m for i, m in enumerate(motions) if i in idx]
+    train = [m for i, m in enumerate(motions) if i not in idx]
+    return train, val, (f"{len(val)} clips ({', '.join(m.name for m in val)}; every 10th clip: the "
+                        f"file names carry no subject numbers)")
 
 
 def validation_set(motions, cfg: TrainConfig) -> list:
@@ -281,37 +329,64 @@ def _portable_paths(config: dict) -> dict:
 def load_weights(path, device="cpu") -> PoseNet:
     """A PoseNet with the weights of a checkpoint (a training checkpoint or a weights-only one
     written by save_weights)."""
-    ck = load_checkpoint_file(path, device)
-    net = PoseNet(ModelConfig.from_dict(ck["config"])).to(device)
-    net.load_state_dict(ck["model"])
-    return net
+    return checkpoint_network(load_checkpoint_file(path, device), path, device)
 
 
 def save_weights(src, dst) -> None:
     """Write the weights-only checkpoint of a training checkpoint (about a third of its size: no
     optimizer state), the form committed beside the shipped model."""
     ck = load_checkpoint_file(src)
-    dst = Path(dst)
-    dst.parent.mkdir(parents=True, exist_ok=True)
-    torch.save({"model": ck["model"], "config": ck["config"], "step": ck.get("step"),
-                "best": ck.get("best")}, str(dst))
+    atomic_torch_save({"model": ck["model"], "config": ck["config"], "step": ck.get("step"),
+                       "best": ck.get("best")}, dst)
+
+
+def atomic_torch_save(obj, path) -> None:
+    """torch.save to a temporary file beside `path`, then os.replace: an interrupted or failed
+    write (disk full, Ctrl-C) leaves the previous file, never a truncated one."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        torch.save(obj, str(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def load_checkpoint_file(path, device="cpu") -> dict:
-    try:   # torch >= 2.6 defaults to weights_only=True; our checkpoints hold plain python too
-        return torch.load(str(path), map_location=device, weights_only=False)
-    except TypeError:
-        return torch.load(str(path), map_location=device)
+    """A checkpoint file's content; a missing or unreadable file is a UsageError naming it."""
+    import pickle
+    import zipfile
+    if not Path(path).is_file():
+        raise UsageError(f"{path}: no such checkpoint file")
+    try:
+        try:   # torch >= 2.6 defaults to weights_only=True; our checkpoints hold plain python too
+            return torch.load(str(path), map_location=device, weights_only=False)
+        except TypeError:
+            return torch.load(str(path), map_location=device)
+    except (pickle.UnpicklingError, EOFError, zipfile.BadZipFile, RuntimeError, UnicodeDecodeError) as e:
+        raise UsageError(f"{path} is not a PyTorch checkpoint ({str(e).splitlines()[0] if str(e) else type(e).__name__})") from e
+
+
+def checkpoint_network(ck, path, device="cpu") -> PoseNet:
+    """The PoseNet of a loaded checkpoint dict ("model" state dict + "config"), or a UsageError
+    naming the file."""
+    if not isinstance(ck, dict) or not isinstance(ck.get("model"), dict) or not isinstance(ck.get("config"), dict):
+        raise UsageError(f"{path} is not a pose model checkpoint (no 'model' weights and 'config')")
+    net = PoseNet(ModelConfig.from_dict(ck["config"])).to(device)
+    try:
+        net.load_state_dict(ck["model"])
+    except RuntimeError as e:
+        raise UsageError(f"{path}: the weights do not fit its network config ({str(e).splitlines()[0]})") from e
+    return net
 
 
 def _save(path: Path, net, opt, step, total, cfg, history, best, rng) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
-    torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
-                "total_steps": total, "config": net.config.to_dict(), "train_config": asdict(cfg),
-                "history": history, "best": best, "numpy_rng": rng.bit_generator.state,
-                "torch_rng": torch.get_rng_state()}, tmp)
-    os.replace(tmp, path)
+    atomic_torch_save({"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
+                       "total_steps": total, "config": net.config.to_dict(), "train_config": asdict(cfg),
+                       "history": history, "best": best, "numpy_rng": rng.bit_generator.state,
+                       "torch_rng": torch.get_rng_state()}, path)
 
 
 def plot_losses(history: dict, path: Path) -> None:
@@ -347,24 +422,21 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     device = pick_device(cfg.device)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
+    ckpt_dir, results_dir = Path(cfg.ckpt_dir), Path(cfg.results_dir)
+    ck = None
+    if cfg.resume:   # before loading data: a wrong resume fails in a second
+        last = ckpt_dir / "last.pt"
+        if not last.is_file():
+            raise UsageError(_nothing_to_resume(ckpt_dir))
+        ck = load_checkpoint_file(last, device)
+        check_resume_config(cfg, ck, last)
     if motions is None:
         motions, val_motions = load_data(cfg)
-    model_cfg = replace(SIZES[cfg.size], anchored=cfg.anchored, wrist_anchor=cfg.wrist_sensor)
-    net = PoseNet(model_cfg).to(device)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
-    ckpt_dir, results_dir = Path(cfg.ckpt_dir), Path(cfg.results_dir)
     step, total, history, best = 0, cfg.steps, {"train": [], "val": []}, None
-    if cfg.init_from and not (cfg.resume and (ckpt_dir / "last.pt").is_file()):
-        # A warm start: the weights only (e.g. the shipped training/checkpoints/*.pt, which a fresh
-        # machine has while training/data/checkpoints/ is gone), so a later run continues from the
-        # shipped model on its own schedule instead of from scratch.
-        net = load_weights(cfg.init_from, device)
-        opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
-        print(f"train: weights from {cfg.init_from}")
-    if cfg.resume and (ckpt_dir / "last.pt").is_file():
-        ck = load_checkpoint_file(ckpt_dir / "last.pt", device)
-        net = PoseNet(ModelConfig.from_dict(ck["config"])).to(device)
-        net.load_state_dict(ck["model"])
+    if ck is not None:
+        # The network exactly as saved: its anchoring, wrist placement and dropout are the run's
+        # own (check_resume_config made sure cfg agrees); nothing is switched over again.
+        net = checkpoint_network(ck, ckpt_dir / "last.pt", device)
         opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
         opt.load_state_dict(ck["optimizer"])
         step, history, best = ck["step"], ck["history"], ck["best"]
@@ -372,16 +444,26 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         rng.bit_generator.state = ck["numpy_rng"]
         torch.set_rng_state(ck["torch_rng"])
         print(f"train: resumed at step {step} of {total}")
-    if cfg.dropout is not None:
-        net.set_dropout(cfg.dropout)
-    if cfg.anchored:
-        net.enable_anchoring()
-    if net.config.wrist_anchor != cfg.wrist_sensor:
-        if cfg.wrist_sensor != "forearm":
-            raise ValueError(f"the weights read the wrist sensors as the {net.config.wrist_anchor}; "
-                             f"training them for the {cfg.wrist_sensor} is not supported")
-        net.anchor_wrists_on_forearm()
-        print("train: the wrist sensors move from the hands to the forearms (wrist straps)")
+    else:
+        model_cfg = replace(SIZES[cfg.size], anchored=cfg.anchored, wrist_anchor=cfg.wrist_sensor)
+        net = PoseNet(model_cfg).to(device)
+        if cfg.init_from:
+            # A warm start: the weights only (e.g. the shipped training/checkpoints/*.pt, which a
+            # fresh machine has while training/data/checkpoints/ is gone), so a later run continues
+            # from the shipped model on its own schedule instead of from scratch.
+            net = load_weights(cfg.init_from, device)
+            print(f"train: weights from {cfg.init_from}")
+        opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+        if cfg.dropout is not None:
+            net.set_dropout(cfg.dropout)
+        if cfg.anchored:
+            net.enable_anchoring()
+        if net.config.wrist_anchor != cfg.wrist_sensor:
+            if cfg.wrist_sensor != "forearm":
+                raise UsageError(f"the weights read the wrist sensors as the {net.config.wrist_anchor}; "
+                                 f"training them for the {cfg.wrist_sensor} is not supported")
+            net.anchor_wrists_on_forearm()
+            print("train: the wrist sensors move from the hands to the forearms (wrist straps)")
     batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng,
                             Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg),
                             wrist=cfg.wrist_sensor)
@@ -481,20 +563,112 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     return summary
 
 
+# Options a resumed run may change when its command line gives them: how long it runs, on what,
+# and where it writes. Every other option comes from the checkpoint (its saved train_config; the
+# network's size, anchoring and wrist placement from its model config).
+RESUME_OVERRIDES = ("budget_minutes", "steps", "device", "ckpt_dir", "results_dir", "progress", "resume",
+                    "eval_every_s", "ckpt_every_s")
+ARCHITECTURE = ("size", "anchored", "wrist_sensor")
+_OPTIONS = {"w_pos": "--pos-weight", "arm_jitter_deg": "--arm-jitter", "anchored": "--no-anchor",
+            "train_source": "--bvh", "val_source": "--val-bvh"}
+_PATH_OPTIONS = ("train_source", "val_source", "init_from", "ckpt_dir", "results_dir")
+
+
+def _option(key: str) -> str:
+    return _OPTIONS.get(key, "--" + key.replace("_", "-"))
+
+
+def _size_dims(cfg: ModelConfig) -> tuple:
+    return cfg.embed, cfg.hidden, cfg.layers, cfg.head
+
+
+def saved_train_config(ck) -> TrainConfig:
+    """The options a checkpoint was trained with: its train_config (unknown keys dropped, keys
+    older checkpoints lack at their defaults), with size, anchoring and wrist placement read from
+    the network's own config."""
+    known = TrainConfig.__dataclass_fields__
+    cfg = TrainConfig(**{k: v for k, v in (ck.get("train_config") or {}).items() if k in known})
+    mc = ModelConfig.from_dict(ck["config"])
+    cfg.anchored, cfg.wrist_sensor = bool(mc.anchored), mc.wrist_anchor
+    cfg.size = next((n for n, c in SIZES.items() if _size_dims(c) == _size_dims(mc)), cfg.size)
+    return cfg
+
+
+def _same(key: str, a, b) -> bool:
+    if key == "size":
+        return a in SIZES and b in SIZES and _size_dims(SIZES[a]) == _size_dims(SIZES[b])
+    if key in _PATH_OPTIONS and isinstance(a, str) and isinstance(b, str):
+        from .dataset import SPLITS
+        if a not in SPLITS and b not in SPLITS:
+            return os.path.realpath(a) == os.path.realpath(b)
+    return a == b
+
+
+def _contradiction(key: str, new, old, path) -> str:
+    if key == "anchored":
+        new, old = ("anchored" if new else "not anchored (--no-anchor)"), ("anchored" if old else "not anchored")
+    what = "network" if key in ARCHITECTURE else "training options"
+    return (f"--resume: {_option(key)} {new} contradicts {path} ({old}); a resumed run keeps its "
+            f"{what} (only --budget-minutes, --steps, --device, --ckpt-dir, --results-dir may "
+            f"change; start a new run with --init-from {path} to change the rest)")
+
+
+def _nothing_to_resume(ckpt_dir) -> str:
+    return (f"--resume: no checkpoint to resume in {ckpt_dir} (no last.pt); run without --resume "
+            f"to start a new run, or give the run's --ckpt-dir")
+
+
+def check_resume_config(cfg: TrainConfig, ck, path) -> None:
+    """A UsageError when cfg asks for anything the checkpoint's run did not (outside
+    RESUME_OVERRIDES): another network, other anchoring or wrist placement, other training
+    options or data."""
+    saved = saved_train_config(ck)
+    for key in TrainConfig.__dataclass_fields__:
+        if key not in RESUME_OVERRIDES and not _same(key, getattr(cfg, key), getattr(saved, key)):
+            raise UsageError(_contradiction(key, getattr(cfg, key), getattr(saved, key), path))
+
+
+def resume_config(cfg: TrainConfig, explicit) -> TrainConfig:
+    """The TrainConfig of `--resume`: the checkpoint's own options, with those of `explicit` (the
+    fields the command line gave) that may change (RESUME_OVERRIDES) taken from cfg. An explicit
+    option that contradicts the checkpoint, or a missing last.pt, is a UsageError."""
+    last = Path(cfg.ckpt_dir) / "last.pt"
+    if not last.is_file():
+        raise UsageError(_nothing_to_resume(cfg.ckpt_dir))
+    saved = saved_train_config(load_checkpoint_file(last))
+    out = replace(saved, resume=True, ckpt_dir=cfg.ckpt_dir, progress=cfg.progress)
+    for key in sorted(explicit):
+        if key in RESUME_OVERRIDES:
+            setattr(out, key, getattr(cfg, key))
+        elif not _same(key, getattr(cfg, key), getattr(saved, key)):
+            raise UsageError(_contradiction(key, getattr(cfg, key), getattr(saved, key), last))
+    return out
+
+
 def config_from_args(args) -> TrainConfig:
-    """The TrainConfig a parsed command line asks for (unset options keep the defaults)."""
+    """The TrainConfig a parsed command line asks for (unset options keep the defaults). With
+    --resume: the checkpoint's saved options (resume_config), the command line changing only what
+    may change."""
     cfg = TrainConfig()
+    explicit = set()
     for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
               "arm_jitter_deg", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
+            explicit.add(k)
     if getattr(args, "no_anchor", False):
         cfg.anchored = False
+        explicit.add("anchored")
     if getattr(args, "bvh", None):
         cfg.train_source = args.bvh
-        cfg.val_source = getattr(args, "val_bvh", None) or args.bvh
+        explicit.add("train_source")
+        # without --val-bvh: a held-out share of the folder (holdout_validation), not its own clips
+        cfg.val_source = getattr(args, "val_bvh", None) or None
+    if getattr(args, "val_bvh", None):
+        cfg.val_source = args.val_bvh
+        explicit.add("val_source")
     if cfg.smoke:
         if getattr(args, "size", None) is None:
             cfg.size = "tiny"
@@ -503,8 +677,12 @@ def config_from_args(args) -> TrainConfig:
         cfg.eval_every_s = 1e9
         if cfg.steps is None:
             cfg.steps = 30
-        cfg.ckpt_dir = str(REPO / "training" / "data" / "smoke" / "checkpoints")
-        cfg.results_dir = str(REPO / "training" / "data" / "smoke" / "results")
+        if "ckpt_dir" not in explicit:
+            cfg.ckpt_dir = str(REPO / "training" / "data" / "smoke" / "checkpoints")
+        if "results_dir" not in explicit:
+            cfg.results_dir = str(REPO / "training" / "data" / "smoke" / "results")
+    if cfg.resume:
+        cfg = resume_config(cfg, explicit)
     return cfg
 
 
@@ -517,7 +695,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--budget-minutes", dest="budget_minutes", type=float, default=None,
                         help="wall-clock budget (default 60)")
     parser.add_argument("--steps", type=int, default=None, help="total steps (default: from budget)")
-    parser.add_argument("--resume", action="store_true", help="continue from checkpoints/last.pt")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the run in --ckpt-dir (its last.pt, which must exist) with its "
+                             "own options; only --budget-minutes, --steps, --device, --ckpt-dir and "
+                             "--results-dir may change")
     parser.add_argument("--init-from", dest="init_from", default=None,
                         help="start from these weights (e.g. training/checkpoints/mocap_pose.pt)")
     parser.add_argument("--device", default=None, choices=["auto", "cpu", "cuda"])
@@ -548,5 +729,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--results-dir", dest="results_dir", default=None,
                         help="loss curve and log folder (default training/results)")
     parser.add_argument("--max-clips", dest="max_clips", type=int, default=None)
-    parser.add_argument("--bvh", default=None, help="train on a BVH folder instead of the CMU split")
-    parser.add_argument("--val-bvh", dest="val_bvh", default=None)
+    parser.add_argument("--bvh", default=None, help="train on a BVH folder instead of the CMU split "
+                        "(without --val-bvh, about 10 %% of its clips are held out for validation: "
+                        "by subject where the names carry CMU subject numbers, else by clip)")
+    parser.add_argument("--val-bvh", dest="val_bvh", default=None,
+                        help="validation BVH folder (default: a held-out share of --bvh)")

@@ -49,3 +49,32 @@ def test_average_refuses_mismatched_checkpoints(tmp_path):
         average.average_state_dicts([s], [1, 1])
     with pytest.raises(ValueError, match=">= 0"):
         average.average_state_dicts([s, s], [1, float("nan")])
+
+
+def test_average_ignores_the_training_only_dropout(tmp_path):
+    from dataclasses import replace
+    _checkpoint(tmp_path / "a.pt", config=replace(TINY, dropout=0.1), seed=1)
+    _checkpoint(tmp_path / "b.pt", config=replace(TINY, dropout=0.3), seed=2)
+    average.average_checkpoints([tmp_path / "a.pt", tmp_path / "b.pt"], tmp_path / "soup.pt")
+    assert tr.load_weights(tmp_path / "soup.pt").config.dropout == 0.1   # the first one's config
+    # what changes the network still has to agree
+    _checkpoint(tmp_path / "c.pt", config=replace(TINY, anchored=True), seed=3)
+    with pytest.raises(ValueError, match="different architecture"):
+        average.average_checkpoints([tmp_path / "a.pt", tmp_path / "c.pt"], tmp_path / "x.pt")
+
+
+def test_average_writes_its_output_atomically(tmp_path, monkeypatch):
+    from pathlib import Path
+    _checkpoint(tmp_path / "a.pt", seed=1)
+    _checkpoint(tmp_path / "b.pt", seed=2)
+    out = tmp_path / "out" / "soup.pt"
+    average.average_checkpoints([tmp_path / "a.pt", tmp_path / "b.pt"], out)
+    before = out.read_bytes()
+
+    def disk_full(obj, f, *a, **k):
+        Path(f).write_bytes(b"partial")
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(torch, "save", disk_full)
+    with pytest.raises(OSError):
+        average.average_checkpoints([tmp_path / "b.pt", tmp_path / "a.pt"], out)
+    assert out.read_bytes() == before and [p.name for p in out.parent.iterdir()] == ["soup.pt"]

@@ -51,3 +51,21 @@ def test_procedural_bvh_capture_replays_with_small_error(tmp_path):
     assert worst < 1.5, r.stdout
     calibrated = int(re.search(r"(\d+) calibrated", r.stdout).group(1))
     assert calibrated >= 0.9 * truth["local_rot"].shape[0], r.stdout
+
+
+def test_truth_path_without_npz_suffix_is_the_file_written(tmp_path, monkeypatch):
+    """np.savez appends .npz to a name without it: the returned path must be that file."""
+    from training import ort as ort_module
+
+    def fake_synth(cmd, **kw):   # stands in for `mocapctl synth`: writes the sensor truth CSV
+        sensors = cmd[cmd.index("--truth") + 1]
+        with open(sensors, "w") as f:
+            f.write("t,phase\n0.000,0\n8.000,3\n")
+        return subprocess.CompletedProcess(cmd, 0, "synth ok", "")
+    monkeypatch.setattr(ort_module, "mocapctl_path", lambda **k: "mocapctl")
+    monkeypatch.setattr(sc.subprocess, "run", fake_synth)
+    motion = procedural.make_motion("walk", 1.0, seed=1)
+    for given, written in (("pose", "pose.npz"), ("pose.truth", "pose.truth.npz"), ("p.npz", "p.npz")):
+        info = sc.synth_capture(None, tmp_path / "c.cap", truth=tmp_path / given, motion=motion)
+        assert info["truth"] == tmp_path / written and info["truth"].is_file()
+        assert int(sc.load_truth(info["truth"])["motion_start"]) == 60

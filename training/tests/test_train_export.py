@@ -3,6 +3,7 @@ import argparse
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -219,3 +220,198 @@ def test_wrist_sensor_option_reaches_training_and_moves_a_hand_model_to_the_fore
     back.ckpt_dir, back.results_dir = str(tmp_path / "ck2"), str(tmp_path / "res2")
     with pytest.raises(ValueError, match="wrist sensors as the forearm"):
         tr.train(back, motions, motions[:1])
+
+
+# ------------------------------------------------------------------ resume, held-out validation
+def _cli(argv):
+    parser = argparse.ArgumentParser()
+    tr.add_arguments(parser)
+    return tr.config_from_args(parser.parse_args([str(a) for a in argv]))
+
+
+def _dirs(tmp_path):
+    return ["--ckpt-dir", tmp_path / "ck", "--results-dir", tmp_path / "res"]
+
+
+TINY_RUN = ["--size", "tiny", "--batch", "4", "--window", "60", "--steps", "2"]
+
+
+def test_resume_continues_with_the_checkpoints_own_options(tmp_path, monkeypatch):
+    motions = _motions(3, 0)
+    first = _cli(TINY_RUN + ["--no-anchor", "--wrist-sensor", "forearm", "--pos-weight", "30",
+                             "--dropout", "0.2", "--arm-swap", "0.5"] + _dirs(tmp_path))
+    tr.train(first, motions, motions[:1])
+    again = _cli(["--resume", "--steps", "4"] + _dirs(tmp_path))   # the flags are not repeated
+    assert (again.anchored, again.wrist_sensor, again.w_pos, again.dropout, again.arm_swap, again.size,
+            again.batch, again.window, again.steps) == (False, "forearm", 30.0, 0.2, 0.5, "tiny", 4, 60, 4)
+
+    def switched(*_):
+        raise AssertionError("a resumed network is switched over again")
+    monkeypatch.setattr(PoseNet, "enable_anchoring", switched)
+    monkeypatch.setattr(PoseNet, "anchor_wrists_on_forearm", switched)
+    assert tr.train(again, motions, motions[:1])["steps"] == 4
+    ck = torch.load(str(tmp_path / "ck" / "last.pt"), weights_only=False)
+    assert (ck["config"]["anchored"], ck["config"]["wrist_anchor"], ck["config"]["dropout"]) == (False, "forearm", 0.2)
+
+
+def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys):
+    from training.__main__ import main
+    from training.cli import UsageError
+    motions = _motions(3, 0)
+    tr.train(_cli(TINY_RUN + _dirs(tmp_path)), motions, motions[:1])      # anchored, hand, tiny
+    for extra in (["--no-anchor"], ["--wrist-sensor", "forearm"], ["--size", "small"], ["--lr", "0.5"]):
+        with pytest.raises(UsageError, match="--resume: " + extra[0]):
+            _cli(["--resume"] + extra + _dirs(tmp_path))
+    # the run's own values, and budget / steps / device / output folders, may be given
+    ok = _cli(["--resume", "--size", "tiny", "--lr", "0.001", "--budget-minutes", "7", "--device", "cpu",
+               "--results-dir", tmp_path / "res2", "--ckpt-dir", tmp_path / "ck"])
+    assert (ok.budget_minutes, ok.device, ok.results_dir, ok.resume) == (7.0, "cpu", str(tmp_path / "res2"), True)
+    # the library entry point refuses the same contradiction
+    with pytest.raises(UsageError, match="--no-anchor"):
+        tr.train(replace(ok, anchored=False), motions, motions[:1])
+    capsys.readouterr()
+    assert main(["train", "--resume", "--wrist-sensor", "forearm"] + [str(a) for a in _dirs(tmp_path)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("training train: --resume: --wrist-sensor forearm contradicts") and "\n" not in err
+
+
+def test_resume_without_a_last_checkpoint_is_an_error(tmp_path, capsys):
+    from training.__main__ import main
+    from training.cli import UsageError
+    ck = tmp_path / "ck"
+    ck.mkdir()
+    (ck / "best.pt").write_bytes(b"the earlier run's best")
+    with pytest.raises(UsageError, match="no checkpoint to resume"):
+        _cli(["--resume"] + _dirs(tmp_path))
+    cfg = tr.TrainConfig(size="tiny", batch=4, window=60, steps=2, resume=True, ckpt_dir=str(ck),
+                         results_dir=str(tmp_path / "res"), progress=False)
+    with pytest.raises(UsageError, match="no checkpoint to resume"):
+        tr.train(cfg, _motions(2, 0), _motions(1, 9))
+    assert (ck / "best.pt").read_bytes() == b"the earlier run's best" and not (ck / "last.pt").exists()
+    assert main(["train", "--resume"] + [str(a) for a in _dirs(tmp_path)]) == 1
+    assert "training train: --resume: no checkpoint to resume in" in capsys.readouterr().err
+
+
+def test_bvh_folder_without_val_folder_holds_out_validation_clips(fixture_dir, tmp_path, monkeypatch, capsys):
+    from training import dataset
+    monkeypatch.setattr(dataset, "CACHE_DIR", tmp_path / "cache")
+    d, truth = fixture_dir
+    cfg = _cli(["--bvh", d])
+    assert cfg.train_source == str(d) and cfg.val_source is None
+    cfg.progress = False
+    train_m, val_m = tr.load_data(cfg)
+    # CMU subject numbers in the names: subject 1 is a CMU validation subject (1 % 10 == 1)
+    assert [m.name for m in val_m] == ["01_01"]
+    assert sorted(m.name for m in train_m) == sorted(n for n in truth if n != "01_01")
+    assert "subjects 1 (CMU validation subjects)" in capsys.readouterr().out
+    assert _cli(["--bvh", d, "--val-bvh", d]).val_source == str(d)       # an explicit folder is kept
+
+
+def test_holdout_validation_by_subject_or_by_clip():
+    def named(n, subjects):
+        return [replace(m, name=f"c{i}", subject=s) for i, (m, s) in enumerate(zip(_motions(n, 0), subjects))]
+    # no CMU validation subject among them: every 10th subject
+    tr_m, va_m, how = tr.holdout_validation(named(4, [2, 3, 4, 5]))
+    assert {m.subject for m in va_m} == {4} and len(tr_m) == 3 and "every 10th subject" in how
+    # no subject numbers: by clip, about 10 %, spread over the folder, deterministic
+    clips = named(12, [0] * 12)
+    tr_m, va_m, how = tr.holdout_validation(clips)
+    assert [m.name for m in va_m] == ["c6"] and len(tr_m) == 11 and "every 10th clip" in how
+    assert [m.name for m in tr.holdout_validation(named(30, [0] * 30))[1]] == ["c5", "c15", "c25"]
+    assert tr.holdout_validation(clips[:1])[1] == []                       # one clip: no validation
+
+
+# ------------------------------------------------------------------ atomic export and its check
+def _tiny_checkpoint(path):
+    torch.manual_seed(0)
+    cfg = ModelConfig(embed=16, hidden=8, layers=1, head=16)
+    torch.save({"model": PoseNet(cfg).state_dict(), "config": cfg.to_dict(), "step": 7}, path)
+    return path
+
+
+def _report(fp32=0.0, fp16=0.0, stream=0.0):
+    def row(x):
+        return {k: (x if k == "joint_rotations" else 0.0) for k in export.OUTPUT_NAMES}
+    return {"fp32": row(fp32), "fp16": row(fp16), "stream_vs_whole_fp32": row(stream)}
+
+
+def test_export_check_thresholds():
+    assert export.check_failures(_report(5e-5, 1.5e-3, 0.0)) == []
+    assert export.check_failures(_report(2e-4))[0].startswith("fp32 joint_rotations differ by 0.0002 > 0.0001")
+    assert export.check_failures(_report(fp16=3e-3))[0].startswith("fp16 joint_rotations")
+    assert export.check_failures(_report(stream=float("nan")))[0].startswith("stream_vs_whole_fp32")
+
+
+def test_export_installs_the_files_only_after_a_passing_check(tmp_path, monkeypatch, capsys):
+    import onnx
+    from training import ort
+    from training.__main__ import main
+    ckpt = _tiny_checkpoint(tmp_path / "tiny.pt")
+    out = tmp_path / "models"
+    out.mkdir()
+    previous = {n: f"previous {n}".encode() for n in (export.FP32_NAME, export.FP16_NAME)}
+    for n, b in previous.items():
+        (out / n).write_bytes(b)
+    seen = {}
+
+    def fake_check(net, paths, *a, **k):   # ONNX Runtime disagrees beyond the fp16 threshold
+        for tag, p in paths.items():
+            meta = {q.key: q.value for q in onnx.load(str(p)).metadata_props}
+            seen[tag] = (p.parent == out, p.name not in previous, meta["mocap.precision"])
+        return _report(fp16=0.05)
+    monkeypatch.setattr(ort, "onnx_runtime_available", lambda: True)
+    monkeypatch.setattr(export, "check_against_torch", fake_check)
+    argv = ["export", "--checkpoint", str(ckpt), "--out", str(out)]
+    capsys.readouterr()
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("training export: ONNX Runtime does not reproduce PyTorch: fp16 joint_rotations "
+                          "differ by 0.05 > 0.002") and "\n" not in err
+    assert seen == {"fp32": (True, True, "fp32"), "fp16": (True, True, "fp16")}   # temporaries, checked
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == previous       # untouched, no leftovers
+    # an interrupted export (the fp16 conversion fails) leaves them too
+    real_convert = export.convert_fp16
+
+    def broken(src, dst):
+        Path(dst).write_bytes(b"half")
+        raise KeyboardInterrupt
+    monkeypatch.setattr(export, "convert_fp16", broken)
+    with pytest.raises(KeyboardInterrupt):
+        main(argv)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == previous
+    # a passing check installs both, complete with the contract's metadata
+    monkeypatch.setattr(export, "convert_fp16", real_convert)
+    monkeypatch.setattr(export, "check_against_torch", lambda *a, **k: _report(1e-7, 1e-4))
+    assert main(argv) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(previous)
+    for n, prec in ((export.FP32_NAME, "fp32"), (export.FP16_NAME, "fp16")):
+        meta = {q.key: q.value for q in onnx.load(str(out / n)).metadata_props}
+        assert sorted(meta) == sorted(CONTRACT_KEYS) and meta["mocap.precision"] == prec
+
+
+def test_export_check_on_the_real_onnx_runtime_passes_and_fails(tmp_path, monkeypatch):
+    from training import ort
+    if not ort.onnx_runtime_available():
+        pytest.skip("ONNX Runtime not available (scripts/fetch_onnxruntime.sh)")
+    net, _ = export.load_checkpoint(_tiny_checkpoint(tmp_path / "tiny.pt"))
+    info = export.export(net, tmp_path / "ok", model_name="t", check=True)
+    assert export.check_failures(info["check"]) == [] and (tmp_path / "ok" / export.FP16_NAME).is_file()
+    monkeypatch.setitem(export.CHECK_TOLERANCE, "fp32", -1.0)   # any difference is too much
+    with pytest.raises(export.ExportCheckError, match="fp32 joint_rotations"):
+        export.export(net, tmp_path / "bad", model_name="t", check=True)
+    assert list((tmp_path / "bad").iterdir()) == []
+
+
+def test_weights_only_save_is_atomic(tmp_path, monkeypatch):
+    src = _tiny_checkpoint(tmp_path / "tiny.pt")
+    dst = tmp_path / "w" / "weights.pt"
+    tr.save_weights(src, dst)
+    before = dst.read_bytes()
+
+    def disk_full(obj, f, *a, **k):
+        Path(f).write_bytes(b"partial")
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(torch, "save", disk_full)
+    with pytest.raises(OSError):
+        tr.save_weights(src, dst)
+    assert dst.read_bytes() == before and [p.name for p in dst.parent.iterdir()] == ["weights.pt"]
