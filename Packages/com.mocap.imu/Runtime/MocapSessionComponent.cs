@@ -501,6 +501,11 @@ namespace Mocap.Imu
                 if (_recording) text.Append(", recording ").Append(stats.CaptureBytesWritten / 1024).Append(" KiB");
                 var error = stats.LastError;
                 if (!string.IsNullOrEmpty(error)) text.Append("\n  ").Append(error);
+                // Inference runs on the engine's thread: its failures are only visible here.
+                var solved = _engine.Solver.GetStats(c);
+                if (solved.RunFailures > 0)
+                    text.Append("\n  inference failed for ").Append(solved.RunFailures).Append(" of ")
+                        .Append(solved.FramesSolved).Append(" frames (poses held): ").Append(solved.LastRunError);
                 text.Append('\n');
             }
             return text.ToString();
