@@ -115,20 +115,22 @@ namespace Mocap.Imu.Editor
             if (flow.Phase == CalibrationFlowPhase.Collecting)
                 EditorGUI.ProgressBar(EditorGUILayout.GetControlRect(false, 18), flow.Progress, $"{CalibrationFlow.StepTitle(flow.CurrentStep)} {flow.Progress:P0}");
 
+            // A click changes which buttons exist: leave this GUI pass at once (ExitGUI), or the
+            // layout laid out for the old state no longer matches the controls of the new one.
             using (new EditorGUILayout.HorizontalScope())
             {
                 using (new EditorGUI.DisabledScope(flow.IsBusy))
                 {
-                    if (GUILayout.Button("Calibrate (heading + T-pose)")) flow.StartFullCalibration(now);
-                    if (GUILayout.Button("T-pose only")) flow.StartTPoseOnly(now);
-                    if (GUILayout.Button("Heading reset")) flow.StartHeadingReset(now);
+                    if (GUILayout.Button("Calibrate (heading + T-pose)")) { flow.StartFullCalibration(now); GUIUtility.ExitGUI(); }
+                    if (GUILayout.Button("T-pose only")) { flow.StartTPoseOnly(now); GUIUtility.ExitGUI(); }
+                    if (GUILayout.Button("Heading reset")) { flow.StartHeadingReset(now); GUIUtility.ExitGUI(); }
                 }
             }
             using (new EditorGUILayout.HorizontalScope())
             {
-                if (flow.Phase == CalibrationFlowPhase.AwaitingTPose && GUILayout.Button("Continue (T-pose)")) flow.Continue(now);
-                if (flow.Phase == CalibrationFlowPhase.Refused && GUILayout.Button("Retry")) flow.Retry(now);
-                if (flow.IsBusy && GUILayout.Button("Cancel")) flow.Cancel();
+                if (flow.Phase == CalibrationFlowPhase.AwaitingTPose && GUILayout.Button("Continue (T-pose)")) { flow.Continue(now); GUIUtility.ExitGUI(); }
+                if (flow.Phase == CalibrationFlowPhase.Refused && GUILayout.Button("Retry")) { flow.Retry(now); GUIUtility.ExitGUI(); }
+                if (flow.IsBusy && GUILayout.Button("Cancel")) { flow.Cancel(); GUIUtility.ExitGUI(); }
             }
 
             DrawSensors(flow);
@@ -170,6 +172,7 @@ namespace Mocap.Imu.Editor
                     {
                         var path = EditorUtility.SaveFilePanel("Save calibration", "", "calibration.txt", "txt");
                         if (!string.IsNullOrEmpty(path)) component.SaveCalibration(character, path);
+                        GUIUtility.ExitGUI(); // the modal dialog broke this pass's layout
                     }
                 }
             }

@@ -121,8 +121,7 @@ namespace Mocap.Imu.Editor
             var name = TakeNaming.TakeName(StartedAt, prefix ?? (Root ? Root.name : null));
             var clip = new AnimationClip { name = name };
             if (Frames > 0) _recorder.SaveToClip(clip);
-            _recorder.ResetRecording();
-            _recorder = null;
+            ReleaseRecorder();
             result.Clip = clip;
             if (_take != null && _take.Count > 0) result.Poses = _take.ToRecording();
             if (folder == null) return result;
@@ -149,7 +148,14 @@ namespace Mocap.Imu.Editor
             Unhook();
             Active.Remove(this);
             RaiseEnded();
+            ReleaseRecorder();
+        }
+
+        // GameObjectRecorder is a native Unity object: dropping the reference would leak it.
+        void ReleaseRecorder()
+        {
             _recorder.ResetRecording();
+            UnityEngine.Object.DestroyImmediate(_recorder);
             _recorder = null;
         }
 

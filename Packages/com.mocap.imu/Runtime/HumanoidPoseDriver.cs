@@ -97,6 +97,9 @@ namespace Mocap.Imu
             _retargeter = null;
             _hasTarget = false;
             _error = "";
+            // Set before any early return: Update rebuilds when the model differs from this, and a
+            // failed rebuild must not be retried (and logged) every frame.
+            _builtFor = session != null ? session.Model : null;
             if (_animator == null) _animator = GetComponent<Animator>();
             if (_animator.avatar == null || !_animator.isHuman)
             {
@@ -131,8 +134,7 @@ namespace Mocap.Imu
             }
             try
             {
-                var model = session != null ? session.Model : null;
-                _builtFor = model;
+                var model = _builtFor;
                 var skeleton = model != null ? model.Info.Skeleton : Skeleton.SmplSkeleton.Default;
                 _retargeter = new RestPoseRetargeter(skeleton, new HumanoidRig(description), restPose);
             }
@@ -170,8 +172,18 @@ namespace Mocap.Imu
             var model = session.Model;
             if (model != null && model != _builtFor)
             {
-                if (_retargeter != null) RestoreBindPose();
-                Rebuild();
+                // The session reopens (loop playback, starting or stopping a recording) with the
+                // same model file: keep the retargeter and the last pose instead of showing the
+                // bind pose until the new engine's first pose.
+                if (_retargeter != null && _builtFor != null && model.Info.Skeleton.HasSameProportions(_builtFor.Info.Skeleton))
+                {
+                    _builtFor = model;
+                }
+                else
+                {
+                    if (_retargeter != null) RestoreBindPose();
+                    Rebuild();
+                }
             }
             if (_retargeter == null) return;
             if (!session.TryGetLatestPose(character, out var pose)) return;

@@ -400,7 +400,8 @@ namespace Mocap.Imu
             if (Time.unscaledTime >= _nextStatusText)
             {
                 _nextStatusText = Time.unscaledTime + 0.5f;
-                statusText = BuildStatusText();
+                try { statusText = BuildStatusText(); }
+                catch (MocapException e) { statusText = e.Message; } // a status line must not stop the capture
             }
         }
 
@@ -486,9 +487,12 @@ namespace Mocap.Imu
             session.Calibration.Save(path);
         }
 
+        // Reused: the text is rebuilt twice a second for the inspector.
+        readonly System.Text.StringBuilder _statusBuilder = new System.Text.StringBuilder(512);
+
         string BuildStatusText()
         {
-            var text = new System.Text.StringBuilder();
+            var text = _statusBuilder.Clear();
             for (int c = 0; c < CharacterCount; c++)
             {
                 var session = _engine.Sessions[c];

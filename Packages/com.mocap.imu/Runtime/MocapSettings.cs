@@ -206,7 +206,11 @@ namespace Mocap.Imu
                     yield return Path.GetFullPath(Pkg + "Windows/x64/onnxruntime.dll");
                     break;
                 case RuntimePlatform.OSXEditor:
-                    yield return Path.GetFullPath(Pkg + "macOS/arm64/libonnxruntime.dylib");
+                    // The package ships Apple silicon only: an Intel editor cannot load it (set
+                    // onnxRuntimePath or MOCAP_ONNXRUNTIME_PATH to an x64 build there).
+                    if (System.Runtime.InteropServices.RuntimeInformation.ProcessArchitecture ==
+                        System.Runtime.InteropServices.Architecture.Arm64)
+                        yield return Path.GetFullPath(Pkg + "macOS/arm64/libonnxruntime.dylib");
                     break;
                 case RuntimePlatform.LinuxEditor:
                     yield return Path.GetFullPath(Pkg + "Linux/x64/libonnxruntime.so");

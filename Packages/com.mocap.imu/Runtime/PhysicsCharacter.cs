@@ -202,7 +202,13 @@ namespace Mocap.Imu
 
         void FixedUpdate()
         {
-            if (_links.Length == 0 || _driver == null || !_driver.HasTarget) return;
+            if (_links.Length == 0 || _driver == null) return;
+            if (!_driver.HasTarget)
+            {
+                // Lost the target (a new avatar or model): place the body again once one returns.
+                _teleported = false;
+                return;
+            }
             if (_drivesDirty) ApplyGains();
             var root = _links[0];
             if (!_teleported)

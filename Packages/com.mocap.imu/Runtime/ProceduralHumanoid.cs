@@ -67,7 +67,7 @@ namespace Mocap.Imu
                 {
                     var t = transforms[bone.Id];
                     var joint = GameObject.CreatePrimitive(PrimitiveType.Sphere);
-                    Object.Destroy(joint.GetComponent<Collider>());
+                    DestroyNow(joint.GetComponent<Collider>());
                     joint.name = "visual";
                     joint.transform.SetParent(t, false);
                     joint.transform.localScale = Vector3.one * (bone.Id == Skeleton.HumanBone.Head ? 0.18f : 0.07f);
@@ -75,7 +75,7 @@ namespace Mocap.Imu
                     // A limb segment from the parent joint to this one, parented to the parent.
                     var parent = transforms[bone.Parent];
                     var limb = GameObject.CreatePrimitive(PrimitiveType.Capsule);
-                    Object.Destroy(limb.GetComponent<Collider>());
+                    DestroyNow(limb.GetComponent<Collider>());
                     limb.name = "visual " + bone.Id;
                     limb.transform.SetParent(parent, false);
                     Vector3 offset = bone.LocalPosition.ToUnity();
@@ -85,6 +85,13 @@ namespace Mocap.Imu
                 }
             }
             return animator;
+        }
+
+        // Destroy is refused outside Play Mode (editor scripts, EditMode tests build characters too).
+        static void DestroyNow(UnityEngine.Object target)
+        {
+            if (Application.isPlaying) UnityEngine.Object.Destroy(target);
+            else UnityEngine.Object.DestroyImmediate(target);
         }
     }
 }

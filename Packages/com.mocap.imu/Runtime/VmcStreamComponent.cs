@@ -58,6 +58,7 @@ namespace Mocap.Imu
             _lastSequence = new ulong[destinations.Count];
             _sentAny = new bool[destinations.Count];
             _characters = new int[destinations.Count];
+            _errors = new string[destinations.Count];
             for (int i = 0; i < destinations.Count; i++) _characters[i] = destinations[i].character;
             var text = new System.Text.StringBuilder();
             for (int i = 0; i < destinations.Count; i++)
@@ -68,12 +69,16 @@ namespace Mocap.Imu
                 }
                 catch (MocapException e)
                 {
-                    text.Append(destinations[i].address).Append(": ").Append(e.Message).Append('\n');
+                    _errors[i] = $"{destinations[i].address}: {e.Message}";
+                    text.Append(_errors[i]).Append('\n');
                     Debug.LogError($"[Mocap IMU] VMC {destinations[i].address}: {e.Message}", this);
                 }
             }
             statusText = text.ToString();
         }
+
+        // Why destination i has no sender (it failed to open or to send), else null.
+        string[] _errors = Array.Empty<string>();
 
         void CloseSenders()
         {
@@ -108,7 +113,8 @@ namespace Mocap.Imu
                 {
                     // Reported once; the other destinations keep streaming.
                     Debug.LogError($"[Mocap IMU] VMC {sender.Destination}: {e.Message}; this destination stops", this);
-                    statusText = $"{sender.Destination}: {e.Message}\n";
+                    _errors[i] = $"{sender.Destination}: {e.Message}; stopped";
+                    statusText = _errors[i] + "\n";
                     sender.Dispose();
                     _senders[i] = null;
                 }
@@ -119,7 +125,12 @@ namespace Mocap.Imu
                 var text = new System.Text.StringBuilder();
                 for (int i = 0; i < _senders.Length; i++)
                 {
-                    if (_senders[i] == null) continue;
+                    // A destination that failed stays listed with its reason, not silently gone.
+                    if (_senders[i] == null)
+                    {
+                        if (_errors[i] != null) text.Append(_errors[i]).Append('\n');
+                        continue;
+                    }
                     var st = _senders[i].GetStats();
                     text.Append(_senders[i].Destination).Append(": ").Append(st.BundlesSent).Append(" bundles, ")
                         .Append(st.SendFailures).Append(" failures\n");

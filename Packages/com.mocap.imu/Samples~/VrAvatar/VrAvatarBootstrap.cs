@@ -16,10 +16,11 @@ public sealed class VrAvatarBootstrap : MonoBehaviour
     public Animator avatar;
     [Tooltip("The headset transform; empty = Camera.main when an XR device is active.")]
     public Transform head;
-    [Tooltip("Eye position relative to the head bone, in the head bone's frame (metres).")]
+    [Tooltip("Eye position relative to the head bone, in the headset's frame: x right, y up, z forward (metres).")]
     public Vector3 eyeOffset = new Vector3(0f, 0.08f, 0.1f);
 
     Transform _headBone;
+    Quaternion _headInFacing; // the head bone's rotation relative to the avatar's facing, at rest
     bool _xr;
 
     void Awake()
@@ -37,6 +38,8 @@ public sealed class VrAvatarBootstrap : MonoBehaviour
         driver.session = session;
         driver.rootMotion = Mocap.Imu.Retarget.RootMotionMode.InPlace; // the headset places the avatar
         _headBone = avatar.GetBoneTransform(HumanBodyBones.Head);
+        // Imported rigs' head bones have their own axes: keep them relative to the headset's.
+        if (_headBone != null) _headInFacing = Quaternion.Inverse(avatar.transform.rotation) * _headBone.rotation;
     }
 
     void LateUpdate()
@@ -45,8 +48,8 @@ public sealed class VrAvatarBootstrap : MonoBehaviour
         var hmd = head != null ? head : (_xr && Camera.main != null ? Camera.main.transform : null);
         if (hmd == null || _headBone == null) return; // no XR rig: the sensors' head is kept
         // Head rotation from the headset; body translated so the eyes are at the headset.
-        _headBone.rotation = hmd.rotation;
-        Vector3 eyes = _headBone.TransformPoint(eyeOffset);
+        _headBone.rotation = hmd.rotation * _headInFacing;
+        Vector3 eyes = _headBone.position + hmd.rotation * eyeOffset;
         Vector3 shift = hmd.position - eyes;
         shift.y = 0f; // height stays the body's: feet on the floor
         avatar.transform.position += shift;

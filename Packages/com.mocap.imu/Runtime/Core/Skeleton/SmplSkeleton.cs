@@ -83,6 +83,22 @@ namespace Mocap.Imu.Skeleton
         /// </summary>
         public Vec3 RestOffset(int joint) => _offsets[joint];
 
+        /// <summary>
+        /// Whether <paramref name="other"/> has exactly these rest offsets: a character retargeted
+        /// for one needs no rebuild for the other (the same model file opened again).
+        /// </summary>
+        public bool HasSameProportions(SmplSkeleton other)
+        {
+            if (other == null) return false;
+            if (ReferenceEquals(other, this)) return true;
+            for (int j = 0; j < JointCount; j++)
+            {
+                Vec3 a = _offsets[j], b = other._offsets[j];
+                if (a.X != b.X || a.Y != b.Y || a.Z != b.Z) return false;
+            }
+            return true;
+        }
+
         /// <summary>Joint <paramref name="joint"/>'s position at rest, model frame, floor at y = 0.</summary>
         public Vec3 RestPosition(int joint) => _restPositions[joint];
 

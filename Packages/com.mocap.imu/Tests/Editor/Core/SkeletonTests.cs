@@ -31,6 +31,20 @@ namespace Mocap.Imu.Tests.Skeleton
         };
 
         [Test]
+        public void SameProportionsMeansEqualRestOffsets()
+        {
+            var offsets = new Vec3[SmplSkeleton.JointCount];
+            for (int j = 0; j < offsets.Length; j++) offsets[j] = SmplSkeleton.Default.RestOffset(j);
+            var copy = SmplSkeleton.FromRestOffsets(offsets);
+            Assert.IsTrue(SmplSkeleton.Default.HasSameProportions(copy));
+            Assert.IsTrue(copy.HasSameProportions(SmplSkeleton.Default));
+            var o = offsets[18];
+            offsets[18] = new Vec3(o.X * 1.01f + 0.001f, o.Y, o.Z);  // a longer upper arm
+            Assert.IsFalse(SmplSkeleton.Default.HasSameProportions(SmplSkeleton.FromRestOffsets(offsets)));
+            Assert.IsFalse(SmplSkeleton.Default.HasSameProportions(null));
+        }
+
+        [Test]
         public void ContractNamesAndParents()
         {
             Assert.That(string.Join(",", SmplSkeleton.JointNames), Is.EqualTo(Names));
