@@ -596,6 +596,12 @@ int calib_check(const mocap_calibration *cal, char *why, size_t cap)
         if (key->kind == KEY_MATRIX) {
             const float *m = key->which == 0 ? cal->world_to_model[key->segment]
                                              : cal->sensor_to_bone[key->segment];
+            for (int i = 0; i < 9; i++) {
+                if (!isfinite(m[i])) {
+                    snprintf(why, cap, "%s has NaN/Inf", key->name);
+                    return -1;
+                }
+            }
             double e = rotation_error(m);
             if (!(e <= ORTHONORMAL_TOLERANCE)) {
                 snprintf(why, cap, "%s is not a rotation (error %g)", key->name, e);
@@ -604,7 +610,7 @@ int calib_check(const mocap_calibration *cal, char *why, size_t cap)
         } else if (key->kind == KEY_VECTOR) {
             for (int i = 0; i < 3; i++) {
                 if (!isfinite(cal->acceleration_offset[key->segment][i])) {
-                    snprintf(why, cap, "%s is not finite", key->name);
+                    snprintf(why, cap, "%s is not finite (NaN/Inf)", key->name);
                     return -1;
                 }
             }

@@ -633,20 +633,9 @@ static mocap_status check_calibration(const mocap_calibration *cal)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
                           "calibration struct_size is %u, this library expects %u",
                           (unsigned)cal->struct_size, (unsigned)sizeof(mocap_calibration));
-    const float *values = &cal->world_to_model[0][0];
-    size_t n = sizeof cal->world_to_model / sizeof(float);
-    for (size_t i = 0; i < n; ++i)
-        if (!isfinite(values[i])) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration has NaN/Inf");
-    values = &cal->sensor_to_bone[0][0];
-    n = sizeof cal->sensor_to_bone / sizeof(float);
-    for (size_t i = 0; i < n; ++i)
-        if (!isfinite(values[i])) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration has NaN/Inf");
-    values = &cal->acceleration_offset[0][0];
-    n = sizeof cal->acceleration_offset / sizeof(float);
-    for (size_t i = 0; i < n; ++i)
-        if (!isfinite(values[i])) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration has NaN/Inf");
-    /* What save and load accept, nothing else: a scaled matrix would flag frames calibrated
-     * while distorting every bone, and the calibration in use could not be saved. */
+    /* What save and load accept, nothing else (NaN/Inf included): a scaled matrix would flag
+     * frames calibrated while distorting every bone, and the calibration in use could not be
+     * saved. */
     char why[160];
     if (calib_check(cal, why, sizeof why) != 0)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration refused: %s", why);

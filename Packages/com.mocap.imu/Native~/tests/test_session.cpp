@@ -493,25 +493,7 @@ TEST(Session, RecordingToAFullDeviceFailsTheOpenClearly)
 // assembler keeps one sample of it per sensor.
 bool wait_for_frames(mocap_session *s, uint64_t frames)
 {
-    for (int i = 0; i < 1000; ++i) {
-        mocap_session_stats stats;
-        mocap_session_get_stats(s, &stats);
-        if (stats.frames_decoded >= frames) return true;
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return false;
-}
-
-// Waits (up to 10 s) until the session has taken `samples` samples.
-bool wait_for_samples(mocap_session *s, uint64_t samples)
-{
-    for (int i = 0; i < 1000; ++i) {
-        mocap_session_stats stats;
-        mocap_session_get_stats(s, &stats);
-        if (stats.samples_decoded >= samples) return true;
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return false;
+    return wait_until(s, 10.0, nullptr, [&](const mocap_session_stats &st) { return st.frames_decoded >= frames; });
 }
 
 TEST(Session, DiskFullMidSessionStopsRecordingButNotTracking)
@@ -535,7 +517,9 @@ TEST(Session, DiskFullMidSessionStopsRecordingButNotTracking)
             std::this_thread::sleep_for(std::chrono::milliseconds(2));
         }
         // A loaded machine (parallel suites) may lag behind the writer: wait for the samples.
-        wait_for_samples(s, (packets.size() - 5) * 6);
+        wait_until(s, 10.0, nullptr, [&](const mocap_session_stats &st) {
+            return st.samples_decoded >= (packets.size() - 5) * 6;
+        });
         mocap_session_stats stats;
         mocap_session_get_stats(s, &stats);
         int result = 0;
