@@ -23,6 +23,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
@@ -31,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
+from .cli import CommandError
 
 REPO = Path(__file__).resolve().parents[1]
 DATA_DIR = REPO / "training" / "data"
@@ -76,23 +78,42 @@ def extract_cmu(dest=None, src=None, force: bool = False, jobs: int = 2) -> Path
         if force or not marker.exists():
             todo.append((a, marker))
     procs = []
-    for a, marker in todo:
-        while len(procs) >= max(1, jobs):
+    try:
+        for a, marker in todo:
+            while len(procs) >= max(1, jobs):
+                _wait_first(procs)
+            print(f"extracting {a.name} ...", flush=True)
+            # tar's complaints go to a file, so that a failure can say what tar said about which
+            # archive (two tars print interleaved, and a progress bar may follow).
+            err = tempfile.TemporaryFile()
+            procs.append((subprocess.Popen(["tar", "xJf", str(a), "-C", str(dest)], stderr=err),
+                          a, marker, err))
+        while procs:
             _wait_first(procs)
-        print(f"extracting {a.name} ...", flush=True)
-        procs.append((subprocess.Popen(["tar", "xJf", str(a), "-C", str(dest)]), marker))
-    while procs:
-        _wait_first(procs)
+    finally:
+        for p, _, _, err in procs:      # after a failure: stop the other extractions
+            p.kill()
+            p.wait()
+            err.close()
     for name in ("manifest.csv", "README.md"):
         if (src / name).exists() and (force or not (dest / name).exists()):
             shutil.copyfile(src / name, dest / name)
     return dest
 
 
+class ExtractionError(CommandError, RuntimeError):
+    """An archive that tar could not extract (damaged, truncated, disk full): a message."""
+
+
 def _wait_first(procs):
-    p, marker = procs.pop(0)
-    if p.wait() != 0:
-        raise RuntimeError(f"tar failed with status {p.returncode}")
+    p, archive, marker, err = procs.pop(0)
+    with err:
+        if p.wait() != 0:
+            err.seek(0)
+            said = err.read().decode("utf-8", "replace").strip().splitlines()
+            detail = ": " + " / ".join(said[-3:]) if said else ""
+            raise ExtractionError(f"extracting {archive} failed (tar exit status {p.returncode}){detail}; "
+                               "run prepare again (archives already extracted are kept)")
     marker.write_text("ok\n")
 
 

@@ -7,6 +7,7 @@ import pytest
 
 from training import dataset as ds
 from training import skeleton as sk
+from training.cli import CommandError
 
 # subject numbers of the 96 subjects in ../shared/data/cmu (a fact from its manifest)
 CMU_SUBJECTS = [1, 2, 3, 6, 7, 8, 9, 10, 11, 12, 13, 15, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29,
@@ -109,6 +110,26 @@ def test_same_file_name_in_two_folders_is_two_clips(tmp_path, fixture_dir):
                              cache_dir=tmp_path / "cache")
         assert [m.name for m in ms] == ["monday/walk", "tuesday/walk"]
         assert not np.array_equal(ms[0].local_rot[:10], ms[1].local_rot[:10])
+
+
+def test_extract_failure_names_the_archive_and_what_tar_said(fixture_dir, tmp_path):
+    d, _ = fixture_dir
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    subprocess.run(["tar", "cJf", str(shared / "cmu-bvh-subjects-b.tar.xz"), "-C", str(d), "bvh"], check=True)
+    (shared / "cmu-bvh-subjects-a.tar.xz").write_bytes(b"not an xz archive\n" * 64)
+    dest = tmp_path / "cmu"
+    with pytest.raises(RuntimeError) as e:
+        ds.extract_cmu(dest, shared)
+    msg = str(e.value)
+    assert isinstance(e.value, CommandError)                 # one line from the CLI, no traceback
+    assert "cmu-bvh-subjects-a.tar.xz" in msg and "tar exit status" in msg
+    assert "xz" in msg.split("tar exit status")[1]          # tar's own words come along
+    assert not list(dest.glob(".extracted-cmu-bvh-subjects-a*"))
+    # a good archive in its place: the next run extracts everything
+    subprocess.run(["tar", "cJf", str(shared / "cmu-bvh-subjects-a.tar.xz"), "-C", str(d), "bvh"], check=True)
+    ds.extract_cmu(dest, shared)
+    assert len(list(dest.glob(".extracted-*"))) == 2 and (dest / "bvh" / "02" / "02_01.bvh").exists()
 
 
 def test_extract_and_prepare(fixture_dir, tmp_path, capsys):

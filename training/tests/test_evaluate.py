@@ -48,6 +48,31 @@ def test_baseline_puts_sensor_orientations_on_their_bones():
     assert 0.05 < err.mean() < 8.0
 
 
+def test_noise_none_gives_perfect_sensors_and_says_so(tmp_path, fixture_dir):
+    m = procedural.make_motion("mixed", 2.0, seed=3)
+    clip = ev.synthesize_clip(m, np.random.default_rng(0), noise="none")
+    g, _ = sk.forward_kinematics(clip.local_rot, np.zeros((len(clip.local_rot), 3)), clip.offsets)
+    # every sensor reports its bone exactly, so the baseline's own bones carry no error at all
+    np.testing.assert_allclose(clip.imu_orientation, g[:, sk.SENSOR_JOINTS], atol=1e-5)
+    pred = ev.predict_baseline(clip)
+    assert ev.rotation_angle_deg(pred.local_rot[:, 0], clip.local_rot[:, 0]).max() < 0.05
+    with pytest.raises(ValueError, match="noise 'loud'"):
+        ev.eval_augmentation("loud")
+    d, _ = fixture_dir
+    reports = {}
+    for noise in ("none", "realistic"):
+        out = tmp_path / noise
+        assert ev.main(["--bvh", str(d), "--no-torch", "--models", "--out", str(out), "--max-clips", "2",
+                        "--no-latency", "--no-cache", "--noise", noise]) == 0
+        reports[noise] = (out / "evaluation.md").read_text()
+    assert "from perfect sensors" in reports["none"] and "perfect sensors, not whether" in reports["none"]
+    assert "with realistic sensor noise" in reports["realistic"] and "perfect" not in reports["realistic"]
+    pelvis = {k: next(line for line in t.splitlines() if line.startswith("| 0 pelvis |"))
+              for k, t in reports.items()}
+    assert float(pelvis["none"].split("|")[2]) < 0.05      # baseline pelvis: exact (float32 arccos)
+    assert float(pelvis["realistic"].split("|")[2]) > 0.05
+
+
 def _export(net, path, L, H):
     """Tiny contract export for the test (metadata from the engine's fixture generator)."""
     spec = importlib.util.spec_from_file_location("fx", ort.NATIVE / "tests" / "make_onnx_fixtures.py")
