@@ -69,7 +69,8 @@ int64_t mocap_monotonic_ns(void);
 void mocap_sleep_ms(int ms);
 
 /* Files by UTF-8 path (the API's paths are UTF-8; Windows' narrow calls would read them in the
- * ANSI code page). NULL / nonzero with errno set on failure. */
+ * ANSI code page). NULL / nonzero with errno set on failure. mocap_fopen's files are not
+ * inherited by programs the process starts (O_CLOEXEC; "N" on Windows). */
 FILE *mocap_fopen(const char *path, const char *mode);
 int mocap_remove_file(const char *path);
 /* Moves from over to in one step, replacing an existing to (rename(); MoveFileEx on Windows,

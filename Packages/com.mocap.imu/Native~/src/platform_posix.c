@@ -8,6 +8,7 @@
 #include "error.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -127,7 +128,28 @@ int64_t mocap_monotonic_ns(void)
     return (int64_t)ts.tv_sec * 1000000000LL + (int64_t)ts.tv_nsec;
 }
 
-FILE *mocap_fopen(const char *path, const char *mode) { return fopen(path, mode); }
+FILE *mocap_fopen(const char *path, const char *mode)
+{
+    /* open() with O_CLOEXEC, then fdopen(): a program the host starts (the Unity editor runs
+     * tools) must not inherit a BVH or calibration file we hold open. fopen's "e" flag does the
+     * same but is not POSIX, and a separate fcntl() would leave a window for a fork. */
+    int flags;
+    switch (mode[0]) {
+    case 'r': flags = strchr(mode, '+') ? O_RDWR : O_RDONLY; break;
+    case 'w': flags = (strchr(mode, '+') ? O_RDWR : O_WRONLY) | O_CREAT | O_TRUNC; break;
+    case 'a': flags = (strchr(mode, '+') ? O_RDWR : O_WRONLY) | O_CREAT | O_APPEND; break;
+    default: errno = EINVAL; return NULL;
+    }
+    int fd = open(path, flags | O_CLOEXEC, 0666);
+    if (fd < 0) return NULL;
+    FILE *f = fdopen(fd, mode);
+    if (!f) {
+        int e = errno;
+        (void)close(fd);
+        errno = e;
+    }
+    return f;
+}
 
 int mocap_remove_file(const char *path) { return remove(path); }
 

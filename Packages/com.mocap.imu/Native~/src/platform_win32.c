@@ -6,8 +6,10 @@
 #define _WIN32_WINNT 0x0601 /* CreateWaitableTimerExW */
 #endif
 #include <windows.h>
+#include <fcntl.h>
 #include <io.h>
 #include <process.h>
+#include <sys/stat.h>
 
 #include "platform.h"
 
@@ -167,9 +169,27 @@ int mocap_utf8_to_wide(const char *utf8, wchar_t *out, int cap)
 
 FILE *mocap_fopen(const char *path, const char *mode)
 {
-    wchar_t wpath[WIDE_PATH_MAX], wmode[16];
-    if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0 || mocap_utf8_to_wide(mode, wmode, 16) != 0) return NULL;
-    return _wfopen(wpath, wmode);
+    /* _wopen with _O_NOINHERIT, then _fdopen: not inherited by processes the host starts (the
+     * Unity editor runs tools), the same as O_CLOEXEC on POSIX and capture_file.c's files. */
+    wchar_t wpath[WIDE_PATH_MAX];
+    int flags;
+    switch (mode[0]) {
+    case 'r': flags = strchr(mode, '+') ? _O_RDWR : _O_RDONLY; break;
+    case 'w': flags = (strchr(mode, '+') ? _O_RDWR : _O_WRONLY) | _O_CREAT | _O_TRUNC; break;
+    case 'a': flags = (strchr(mode, '+') ? _O_RDWR : _O_WRONLY) | _O_CREAT | _O_APPEND; break;
+    default: errno = EINVAL; return NULL;
+    }
+    flags |= strchr(mode, 'b') ? _O_BINARY : _O_TEXT;
+    if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0) return NULL;
+    int fd = _wopen(wpath, flags | _O_NOINHERIT, _S_IREAD | _S_IWRITE);
+    if (fd < 0) return NULL;
+    FILE *f = _fdopen(fd, mode);
+    if (!f) {
+        int e = errno;
+        _close(fd);
+        errno = e;
+    }
+    return f;
 }
 
 int mocap_remove_file(const char *path)

@@ -192,6 +192,29 @@ TEST(CaptureFile, RoundTripOfThousandsOfRandomRecords)
     EXPECT_GE(res.chunks, payload / CAPTURE_CHUNK_CAPACITY + 1);
 }
 
+#if !defined(_WIN32)
+TEST(CaptureFile, FilesAreNotInheritedByStartedPrograms)
+{
+    const std::string path = test_temp_path("inherit.mcap");
+    capture_writer *w = nullptr;
+    OpenedDescriptors dw = descriptors_opened_by([&] {
+        ASSERT_EQ(capture_writer_open(path.c_str(), &w), MOCAP_OK) << mocap_last_error();
+    });
+    EXPECT_EQ(dw.opened.size(), 1u);
+    EXPECT_TRUE(dw.inheritable.empty());
+    const uint8_t bytes[3] = {1, 2, 3};
+    ASSERT_EQ(capture_writer_append(w, 7, bytes, sizeof bytes), MOCAP_OK);
+    ASSERT_EQ(capture_writer_close(w), MOCAP_OK);
+    capture_reader *r = nullptr;
+    OpenedDescriptors dr = descriptors_opened_by([&] {
+        ASSERT_EQ(capture_reader_open(path.c_str(), &r), MOCAP_OK) << mocap_last_error();
+    });
+    EXPECT_EQ(dr.opened.size(), 1u);
+    EXPECT_TRUE(dr.inheritable.empty());
+    capture_reader_close(r);
+}
+#endif
+
 TEST(CaptureFile, LongRecordsAreSplitWithTheSameTimestamp)
 {
     const std::string path = test_temp_path("split.mcap");

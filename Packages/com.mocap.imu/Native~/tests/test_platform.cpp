@@ -1,10 +1,14 @@
-// Threads, mutexes and the monotonic clock of platform.h.
+// Threads, mutexes, the monotonic clock and the files of platform.h.
 #include <gtest/gtest.h>
 
 #include <atomic> // before platform.h: g++ needs it for _Atomic in C++ mode
 #include <cstring>
 #include <string>
+#include <cerrno>
+#include <cstdio>
 #include <vector>
+
+#include "test_support.h"
 
 extern "C" {
 #include "error.h"
@@ -125,4 +129,42 @@ TEST(Platform, SleepOfZeroOrLessReturnsImmediately)
     mocap_sleep_ms(0);
     mocap_sleep_ms(-5);
     EXPECT_LT(mocap_monotonic_ns() - before, 1000000000LL);
+}
+
+// The Unity editor starts tools while a session runs: they must not inherit the files the engine
+// holds (a BVH being written, a calibration being read), which would also keep them locked.
+TEST(Platform, OpenedFilesAreNotInheritedByStartedPrograms)
+{
+    const std::string path = test_temp_path("file.txt");
+    const struct {
+        const char *mode;
+        const char *write;
+        const char *expect_after; // file content after the write, "" for a read
+    } cases[] = {{"w", "one\n", "one\n"}, {"r", nullptr, "one\n"},   {"a", "two\n", "one\ntwo\n"},
+                 {"rb", nullptr, "one\ntwo\n"}, {"r+", "ONE", "ONE\ntwo\n"}, {"wb+", "new", "new"},
+                 {"a+", "!", "new!"}};
+    for (const auto &c : cases) {
+        SCOPED_TRACE(c.mode);
+        FILE *f = nullptr;
+        OpenedDescriptors d = descriptors_opened_by([&] { f = mocap_fopen(path.c_str(), c.mode); });
+        ASSERT_NE(f, nullptr) << std::strerror(errno);
+        EXPECT_EQ(d.opened.size(), 1u);
+        EXPECT_TRUE(d.inheritable.empty()) << "the descriptor is inherited by exec";
+        if (c.write) {
+            EXPECT_GE(std::fputs(c.write, f), 0);
+        }
+        ASSERT_EQ(std::fclose(f), 0);
+        FILE *check = std::fopen(path.c_str(), "rb");
+        ASSERT_NE(check, nullptr);
+        char buf[64] = {0};
+        const size_t n = std::fread(buf, 1, sizeof buf - 1, check);
+        std::fclose(check);
+        EXPECT_EQ(std::string(buf, n), c.expect_after);
+    }
+    errno = 0;
+    EXPECT_EQ(mocap_fopen(path.c_str(), "x"), nullptr);
+    EXPECT_EQ(errno, EINVAL);
+    errno = 0;
+    EXPECT_EQ(mocap_fopen(test_temp_path("absent.txt").c_str(), "r"), nullptr);
+    EXPECT_EQ(errno, ENOENT);
 }

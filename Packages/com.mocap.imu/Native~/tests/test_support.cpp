@@ -14,8 +14,11 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <dirent.h>
+#include <fcntl.h>
 
-#include <unistd.h>
+#include <algorithm>
+#include <set>
 
 // Outside a test (e.g. in SetUpTestSuite) there is no test name; ctest runs each test in its own
 // process, possibly in parallel, so the fallback must be unique per process or one process would
@@ -109,4 +112,33 @@ int exit_code_with_file_size_limit(uint64_t max_file_bytes, const std::function<
     int status = 0;
     if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status)) return -1;
     return WEXITSTATUS(status) == 120 ? -1 : WEXITSTATUS(status);
+}
+
+static std::set<int> open_descriptors()
+{
+    std::set<int> fds;
+    DIR *d = opendir("/proc/self/fd");
+    if (!d) return fds;
+    const int own = dirfd(d);
+    while (const struct dirent *e = readdir(d)) {
+        if (e->d_name[0] == '.') continue;
+        const int fd = std::atoi(e->d_name);
+        if (fd != own) fds.insert(fd);
+    }
+    closedir(d);
+    return fds;
+}
+
+OpenedDescriptors descriptors_opened_by(const std::function<void()> &action)
+{
+    const std::set<int> before = open_descriptors();
+    action();
+    OpenedDescriptors out;
+    for (int fd : open_descriptors()) {
+        if (before.count(fd)) continue;
+        out.opened.push_back(fd);
+        const int flags = fcntl(fd, F_GETFD);
+        if (flags >= 0 && !(flags & FD_CLOEXEC)) out.inheritable.push_back(fd);
+    }
+    return out;
 }

@@ -27,3 +27,11 @@ std::string python_with_numpy();
 // code, or -1 when the fork or the limit failed or the child died. The child must not use gtest
 // assertions: it returns a code that says what went wrong.
 int exit_code_with_file_size_limit(uint64_t max_file_bytes, const std::function<int()> &child);
+
+// The descriptors opened while action ran and still open after it, and those of them that a
+// program started with exec would inherit (no FD_CLOEXEC). Reads /proc/self/fd (Linux).
+struct OpenedDescriptors {
+    std::vector<int> opened;
+    std::vector<int> inheritable;
+};
+OpenedDescriptors descriptors_opened_by(const std::function<void()> &action);

@@ -161,6 +161,21 @@ TEST(SerialPty, SmallReadCapacitySplitsWithoutLoss)
     transport_close(t);
 }
 
+TEST(SerialPty, PortIsNotInheritedByStartedPrograms)
+{
+    Pty pty;
+    ASSERT_TRUE(pty.ok());
+    transport *t = nullptr;
+    OpenedDescriptors d = descriptors_opened_by([&] {
+        ASSERT_EQ(transport_open_serial(pty.path.c_str(), 115200, &t), MOCAP_OK) << last_error();
+    });
+    ASSERT_NE(t, nullptr);
+    EXPECT_GE(d.opened.size(), 1u);
+    // A program holding the port open would keep the device busy after we close it.
+    EXPECT_TRUE(d.inheritable.empty());
+    transport_close(t);
+}
+
 TEST(SerialPty, PortIsRaw8N1WithoutFlowControl)
 {
     Pty pty;

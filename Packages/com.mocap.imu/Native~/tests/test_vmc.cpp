@@ -371,6 +371,23 @@ TEST(Vmc, Ipv6LoopbackDestination)
     mocap_vmc_close(v);
 }
 
+TEST(Vmc, SocketIsNotInheritedByStartedPrograms)
+{
+    Receiver rx(AF_INET);
+    ASSERT_GE(rx.fd, 0);
+    udp_sender *u = nullptr;
+    const std::string dest = "127.0.0.1:" + std::to_string(rx.port);
+    OpenedDescriptors d = descriptors_opened_by([&] {
+        ASSERT_EQ(udp_sender_open(dest.c_str(), 0, &u), MOCAP_OK) << mocap_last_error();
+    });
+    ASSERT_NE(u, nullptr);
+    EXPECT_EQ(d.opened.size(), 1u);
+    EXPECT_TRUE(d.inheritable.empty()) << "a program the editor starts would hold our port";
+    EXPECT_EQ(udp_sender_send(u, "x", 1), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(rx.receive_all().size(), 1u);
+    udp_sender_close(u);
+}
+
 TEST(Vmc, DestinationsParseAndDefaultToLoopback)
 {
     char host[256];
