@@ -128,7 +128,9 @@ double clock_map(clock_mapper *c, double sensor_s, double receive_s)
         c->initialised = 1;
         c->offset = candidate;
         c->last_receive = receive_s;
-        return sensor_s + c->offset;
+        c->last_sensor = sensor_s;
+        c->last_mapped = sensor_s + c->offset;
+        return c->last_mapped;
     }
     double elapsed = receive_s - c->last_receive;
     if (elapsed < 0.0)
@@ -140,5 +142,14 @@ double clock_map(clock_mapper *c, double sensor_s, double receive_s)
     c->offset = candidate < raised ? candidate : raised;
     if (receive_s > c->last_receive)
         c->last_receive = receive_s;
-    return sensor_s + c->offset;
+    double mapped = sensor_s + c->offset;
+    if (sensor_s > c->last_sensor) {
+        /* Newer on the sensor clock: keep it newer on ours (see CLOCK_ORDER_STEP_S). An equal or
+         * older sensor time (a repeated or reordered sample) is left for the caller to refuse. */
+        if (mapped < c->last_mapped + CLOCK_ORDER_STEP_S)
+            mapped = c->last_mapped + CLOCK_ORDER_STEP_S;
+        c->last_sensor = sensor_s;
+        c->last_mapped = mapped;
+    }
+    return mapped;
 }

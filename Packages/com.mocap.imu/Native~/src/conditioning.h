@@ -56,13 +56,22 @@ int64_t time_unwrap_ms(time_unwrapper *u, uint32_t raw_ms);
 
 /* Maps sensor time onto the receive clock: session_t = sensor_t + offset, with offset the
  * smallest (receive - sensor) seen recently, so transport latency jitter does not enter the
- * timeline. A jump of more than reset_after_s (sensor reboot, clock step) re-initialises. */
+ * timeline. A jump of more than reset_after_s (sensor reboot, clock step) re-initialises.
+ * A sample newer on the sensor clock always maps after the one before, at least
+ * CLOCK_ORDER_STEP_S later: when the offset drops by more than the samples' spacing (data that
+ * arrives faster than the sensor produced it: a backlog at start, a receiver catching up) the
+ * samples of one read would otherwise all map to its receive time and all but one be refused
+ * as not newer. Such a sample may then map up to CLOCK_ORDER_STEP_S per sample past its
+ * receive time. */
+#define CLOCK_ORDER_STEP_S 1e-4
 typedef struct clock_mapper {
     int initialised;
     double offset;
     double reset_after_s;
     double drift_per_s;  /* how fast offset may rise to follow a sensor clock running slow */
     double last_receive;
+    double last_sensor;  /* newest sensor time mapped, and where it went */
+    double last_mapped;
 } clock_mapper;
 void clock_mapper_init(clock_mapper *c);
 double clock_map(clock_mapper *c, double sensor_s, double receive_s);

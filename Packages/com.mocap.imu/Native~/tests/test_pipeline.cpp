@@ -265,6 +265,36 @@ TEST(Pipeline, AQueuedStepStartsAfterTheOneBeforeAndKeepsItsDuration)
 
 // Older chained firmware sends no sensor time: the samples of one read share its receive time.
 // A read holding several samples of a sensor (USB latency, a late reader) must lose none.
+// Sensor-timed samples arriving five times faster than the sensors made them, ten frames per
+// read (a backlog, a receiver catching up): none may be refused as older than the one before.
+TEST(Pipeline, TimedSamplesDeliveredFasterThanRealTimeAreAllKept)
+{
+    synth_config cfg = base_config(71, MOCAP_WORLD_NWU);
+    cfg.motion_s = 2.0;
+    std::vector<GeneratedPacket> packets = generate(cfg);
+    PipelineRun run;
+    mocap_session_config config = default_config();
+    pipeline_init(run.p.get(), &config, on_frame, &run);
+    int64_t receive_ns = 1000000000LL;
+    uint64_t samples = 0;
+    std::vector<uint8_t> bytes;
+    for (size_t i = 0; i < packets.size(); ++i) {
+        bytes.insert(bytes.end(), packets[i].bytes.begin(), packets[i].bytes.end());
+        samples += MOCAP_SENSOR_COUNT;
+        if (bytes.size() && (i % 10 == 9 || i + 1 == packets.size())) {
+            pipeline_feed(run.p.get(), bytes.data(), bytes.size(), receive_ns);
+            bytes.clear();
+            receive_ns += 20000000LL;
+        }
+    }
+    pipeline_finish(run.p.get(), receive_ns + 2000000000LL);
+    EXPECT_EQ(run.p->counters.samples_rejected, 0u);
+    EXPECT_EQ(run.p->counters.samples_decoded, samples);
+    ASSERT_GT(run.frames.size(), 10u);
+    for (size_t i = 1; i < run.frames.size(); ++i)
+        ASSERT_GT(run.frames[i].time_s, run.frames[i - 1].time_s) << "frame " << i;
+}
+
 TEST(Pipeline, SamplesWithoutSensorTimeInOneReadAreAllKept)
 {
     PipelineRun run;
