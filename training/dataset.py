@@ -62,8 +62,10 @@ SPLIT = {"rule": f"canonical subject % 10 == {VAL_RESIDUE} -> val, == {TEST_RESI
 
 
 # ------------------------------------------------------------------------------ extraction
-def extract_cmu(dest=None, src=None, force: bool = False, jobs: int = 2) -> Path:
-    """Extract ../shared/data/cmu/*.tar.xz into dest (idempotent: a marker per archive)."""
+def extract_cmu(dest=None, src=None, force: bool = False, jobs: int = 1) -> Path:
+    """Extract ../shared/data/cmu/*.tar.xz into dest (idempotent: a marker per archive).
+    One archive at a time by default: two tars creating the same folders at once can fail
+    ("Cannot open: File exists"), and the four archives take seconds either way."""
     dest = Path(CMU_DIR if dest is None else dest)
     src = Path(SHARED_CMU if src is None else src)
     archives = sorted(src.glob("*.tar.xz"))
