@@ -62,6 +62,9 @@ namespace Mocap.Imu
             public MocapModel Model;
             public MocapSolver Solver;
             public MocapSession[] Sessions;
+            // Each character's calibration as its session stopped (null: none, or it failed to
+            // stop): read after the stop, which still finishes a step on the bytes read before it.
+            public CalibrationData?[] FinalCalibrations;
 
             public void Dispose() => Shutdown();
 
@@ -74,6 +77,7 @@ namespace Mocap.Imu
                 string failures = "";
                 if (Sessions != null)
                 {
+                    FinalCalibrations = new CalibrationData?[Sessions.Length];
                     for (int c = 0; c < Sessions.Length; c++)
                     {
                         var session = Sessions[c];
@@ -81,6 +85,7 @@ namespace Mocap.Imu
                         try
                         {
                             var stats = session.Stop();
+                            FinalCalibrations[c] = session.Calibration;
                             if (stats.CaptureError != MocapStatus.Ok)
                                 failures += $"recording of character {c} failed ({stats.CaptureError}): {stats.LastError}\n";
                         }
@@ -323,22 +328,25 @@ namespace Mocap.Imu
         {
             CalibrationData?[] carry = null;
             SessionConfig[] carriedFrom = null;
-            if (_engine != null)
+            var engine = _engine;
+            if (engine != null)
             {
-                carry = new CalibrationData?[_engine.Sessions.Length];
-                carriedFrom = new SessionConfig[carry.Length];
-                for (int c = 0; c < carry.Length; c++)
-                {
-                    carriedFrom[c] = _engine.Sessions[c].Config;
-                    try
-                    {
-                        var calibration = _engine.Sessions[c].Calibration;
-                        if ((calibration.ValidMask | calibration.HeadingMask) != 0) carry[c] = calibration;
-                    }
-                    catch (MocapException) { }
-                }
+                carriedFrom = new SessionConfig[engine.Sessions.Length];
+                for (int c = 0; c < carriedFrom.Length; c++) carriedFrom[c] = engine.Sessions[c].Config;
             }
             Close();
+            if (engine?.FinalCalibrations != null)
+            {
+                // Taken after each session stopped (Engine.Shutdown), so a step that finished on
+                // the last bytes is carried too.
+                carry = new CalibrationData?[engine.FinalCalibrations.Length];
+                for (int c = 0; c < carry.Length; c++)
+                {
+                    var calibration = engine.FinalCalibrations[c];
+                    if (calibration.HasValue && (calibration.Value.ValidMask | calibration.Value.HeadingMask) != 0)
+                        carry[c] = calibration;
+                }
+            }
             Open(carriedFrom, carry);
         }
 

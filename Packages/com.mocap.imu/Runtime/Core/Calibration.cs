@@ -160,6 +160,7 @@ namespace Mocap.Imu
         /// </summary>
         public void Save(string path)
         {
+            MocapEngine.EnsureCompatible();
             var utf8 = NativeText.ToNullTerminated(path, nameof(path));
             CalibrationData copy = WithStructSize();
             fixed (byte* p = utf8) NativeMethods.Check(NativeMethods.mocap_calibration_save(&copy, p));
@@ -172,6 +173,9 @@ namespace Mocap.Imu
         /// </summary>
         public static CalibrationData Load(string path)
         {
+            // The engine writes its own sizeof(mocap_calibration) into the result: a library of
+            // another API version must be refused before that, not after.
+            MocapEngine.EnsureCompatible();
             var utf8 = NativeText.ToNullTerminated(path, nameof(path));
             CalibrationData result;
             fixed (byte* p = utf8) NativeMethods.Check(NativeMethods.mocap_calibration_load(p, &result));

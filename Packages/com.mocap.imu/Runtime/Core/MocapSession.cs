@@ -125,9 +125,10 @@ namespace Mocap.Imu
             // later Start would open a new one the solver never sees.
             if (ConsumingSolver != null)
                 throw new InvalidOperationException("a MocapSolver consumes this session: dispose the solver first");
-            _stoppedCalibration = Calibration;
             // Its status is the capture's outcome, which the final stats carry too.
             NativeMethods.mocap_session_stop(_handle);
+            // After the stop: a calibration step can still finish on the bytes read before it.
+            _stoppedCalibration = Calibration;
             MocapSessionStats stats;
             NativeMethods.Check(NativeMethods.mocap_session_get_stats(_handle, &stats));
             _stoppedStats = stats;
@@ -141,7 +142,11 @@ namespace Mocap.Imu
         MocapSessionStats _stoppedStats;
         bool _disposed;
 
-        /// <summary>Stop and free the native session.</summary>
+        /// <summary>
+        /// Stop and free the native session. A session that records (<see cref="SessionConfig.CapturePath"/>)
+        /// only reports a last flush or close that failed (a full disk) through <see cref="Stop"/>'s
+        /// stats: call Stop first to learn whether the capture is complete; Dispose cannot report it.
+        /// </summary>
         public void Dispose()
         {
             if (_disposed) return;
@@ -245,13 +250,15 @@ namespace Mocap.Imu
         }
 
         /// <summary>
-        /// The calibration in use. Setting it (e.g. one loaded with
-        /// <see cref="CalibrationData.Load"/>) replaces it from the next frame on.
+        /// The calibration in use (after <see cref="Stop"/>: the one it had when it stopped). Setting
+        /// it (e.g. one loaded with <see cref="CalibrationData.Load"/>) replaces it from the next frame on.
         /// </summary>
         public unsafe CalibrationData Calibration
         {
             get
             {
+                // Stopped: what it was when the session stopped (it is restored by Start).
+                if (_handle == null && !_disposed) return _stoppedCalibration;
                 CalibrationData calibration;
                 NativeMethods.Check(NativeMethods.mocap_calibration_get(Handle, &calibration));
                 return calibration;

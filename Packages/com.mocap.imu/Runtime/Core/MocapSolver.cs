@@ -85,6 +85,16 @@ namespace Mocap.Imu
         {
             Model = model;
             _handle = handle;
+            // The sessions are handed back only once mocap_solver_close has stopped the inference
+            // thread: Dispose only defers that close while another thread is inside a solver call
+            // (ResetCharacter, GetStats), and a session polled meanwhile would have two consumers.
+            handle.Closed = ReleaseSessions;
+        }
+
+        void ReleaseSessions()
+        {
+            foreach (var session in _sessions)
+                if (session.ConsumingSolver == this) session.ConsumingSolver = null;
         }
 
         /// <summary>Create a solver for a model (its config defaults when <paramref name="config"/> is null).</summary>
@@ -231,11 +241,12 @@ namespace Mocap.Imu
         {
             if (_disposed) return;
             _disposed = true;
-            _handle.Dispose();
-            foreach (var session in _sessions)
-                if (session.ConsumingSolver == this) session.ConsumingSolver = null;
+            _handle.Dispose();   // the sessions come back in SolverHandle.ReleaseHandle (ReleaseSessions)
             _started = false;
         }
+
+        /// <summary>The native handle, whatever its state (tests).</summary>
+        internal SolverHandle NativeHandle => _handle;
 
         SolverHandle Handle
         {

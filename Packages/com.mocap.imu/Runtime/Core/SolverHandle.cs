@@ -44,6 +44,12 @@ namespace Mocap.Imu
             _dependencies.RemoveAt(last);
         }
 
+        /// <summary>
+        /// Called once mocap_solver_close has returned (on the thread that released the handle:
+        /// Dispose's, the last solver call's, or the finalizer's), before the dependencies go.
+        /// </summary>
+        internal Action Closed;
+
         /// <summary>Adopt the pointer mocap_solver_open returned (once, right after the open).</summary>
         internal void Adopt(IntPtr solver) => SetHandle(solver);
 
@@ -52,6 +58,8 @@ namespace Mocap.Imu
         {
             // Stops and joins the inference thread: after this nothing reads the sessions or model.
             NativeSolverMethods.mocap_solver_close(handle);
+            Closed?.Invoke();
+            Closed = null;
             // Sessions before the model, mirroring the C API's close order.
             for (int i = _dependencies.Count - 1; i >= 0; i--) _dependencies[i].DangerousRelease();
             _dependencies.Clear();

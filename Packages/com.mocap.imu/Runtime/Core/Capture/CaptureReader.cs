@@ -146,6 +146,7 @@ namespace Mocap.Imu.Capture
         /// The next record, or false at the end of the file. The record's bytes are valid until
         /// the next call.
         /// </summary>
+        /// <exception cref="MocapException">IO (or NotFound, Permission) naming the file when reading fails.</exception>
         public bool TryReadNext(out CaptureRecord record)
         {
             record = default;
@@ -296,15 +297,23 @@ namespace Mocap.Imu.Capture
 
         int ReadAt(long offset, byte[] buffer, int index, int count)
         {
-            _stream.Position = offset;
-            int total = 0;
-            while (total < count)
+            try
             {
-                int n = _stream.Read(buffer, index + total, count - total);
-                if (n <= 0) break;
-                total += n;
+                _stream.Position = offset;
+                int total = 0;
+                while (total < count)
+                {
+                    int n = _stream.Read(buffer, index + total, count - total);
+                    if (n <= 0) break;
+                    total += n;
+                }
+                return total;
             }
-            return total;
+            catch (Exception e) when (RecordingFiles.IsFileError(e))
+            {
+                // A read failing after the open (a removed drive, a network share gone).
+                throw RecordingFiles.Failure(_name, "capture file", "cannot read", e);
+            }
         }
 
         static int GetU16(byte[] b, int p) => b[p] | (b[p + 1] << 8);

@@ -80,6 +80,11 @@ namespace Mocap.Imu.Recording
         public int FrameCount { get; }
         /// <summary>Seconds per frame.</summary>
         public double FrameTime { get; }
+        /// <summary>
+        /// Motion lines after the frames the header counts, left out: a writer stopped between
+        /// appending frames and updating <c>Frames:</c> (a crash while streaming). 0 normally.
+        /// </summary>
+        public int IgnoredTrailingLines { get; private set; }
 
         /// <summary>Read a BVH file.</summary>
         /// <exception cref="MocapException">NotFound, Permission or IO naming the file and the cause; Format naming the file, line and problem.</exception>
@@ -249,10 +254,14 @@ namespace Mocap.Imu.Recording
             }
             if (frame < frames)
                 throw Error(source, lines.Length - 1, $"the header says {frames} frames, the file holds {frame}");
+            // Lines after the counted frames are what a streaming writer leaves when it stops
+            // between writing frames and rewriting the count (the engine's BVH writer, a crash):
+            // the counted frames are whole, the rest may end mid-line. Left out and counted, as
+            // other BVH readers read the first `Frames:` frames.
+            int ignored = 0;
             for (; line < lines.Length; line++)
-                if (lines[line].Trim().Length != 0)
-                    throw Error(source, line, $"more motion lines than the {frames} frames the header gives");
-            return new BvhFile(joints, channels, frames, frameTime, motion);
+                if (lines[line].Trim().Length != 0) ignored++;
+            return new BvhFile(joints, channels, frames, frameTime, motion) { IgnoredTrailingLines = ignored };
         }
 
         static void ParseJoint(Tokens tokens, List<BvhJoint> joints, int parent, ref int channelTotal)

@@ -18,9 +18,10 @@
 //                 (w,x,y,z), f32 positions [24][3], f32 root_position[3], f32 root_velocity[3],
 //                 f32 foot_contact[2], i64 newest_receive_ns, i64 frame_emitted_ns,
 //                 i64 pose_emitted_ns: no padding.
-// A reader requires the file to hold exactly `pose count` whole records, except that whole records
-// beyond the count are read too (a writer that died after appending but before its last Flush);
-// a partial record is an error.
+// A reader requires the file to hold at least `pose count` whole records. Whole records beyond the
+// count are read too, and a partial record after them is left out (PoseRecording.DiscardedTailBytes):
+// both are what a writer leaves when it dies, or is read, between two Flushes (its file buffer
+// hands the OS whatever fits, so the file often ends inside a record).
 
 using System;
 using System.Buffers.Binary;
@@ -62,6 +63,11 @@ namespace Mocap.Imu.Recording
         public SmplSkeleton Skeleton { get; }
         /// <summary>The poses, in recorded order.</summary>
         public MocapPose[] Poses { get; }
+        /// <summary>
+        /// Bytes of a partial pose at the end of the file that <see cref="Load"/> left out: a writer
+        /// that crashed, or was still writing, between two flushes. 0 for a file closed properly.
+        /// </summary>
+        public int DiscardedTailBytes { get; private set; }
 
         /// <summary>
         /// Write the recording to <paramref name="path"/>, replacing the file only once every pose
@@ -92,7 +98,21 @@ namespace Mocap.Imu.Recording
         /// <exception cref="MocapException">NotFound, Permission or IO naming the file and the cause; Format naming the file and what is wrong.</exception>
         public static PoseRecording Load(string path)
         {
+            if (!BitConverter.IsLittleEndian) throw new PlatformNotSupportedException("pose recordings need a little-endian CPU");
             using var stream = RecordingFiles.OpenRead(path, "pose recording");
+            try
+            {
+                return Read(stream, path);
+            }
+            catch (Exception e) when (RecordingFiles.IsFileError(e))
+            {
+                // A read that fails after the open (a removed drive, a network share gone).
+                throw RecordingFiles.Failure(path, "pose recording", "cannot read", e);
+            }
+        }
+
+        static PoseRecording Read(FileStream stream, string path)
+        {
             var header = new byte[HeaderSize];
             if (ReadFully(stream, header) != HeaderSize)
                 throw Bad(path, $"{stream.Length} bytes, shorter than the {HeaderSize}-byte header");
@@ -123,16 +143,15 @@ namespace Mocap.Imu.Recording
 
             long body = stream.Length - HeaderSize;
             long whole = body / RecordSize;
-            if (body % RecordSize != 0)
-                throw Bad(path, $"truncated: {body % RecordSize} bytes of a partial pose after pose {whole}");
+            int partial = (int)(body % RecordSize);
             if ((ulong)whole < count)
-                throw Bad(path, $"truncated: the header says {count} poses, the file holds {whole}");
+                throw Bad(path, $"truncated: the header says {count} poses, the file holds {whole}" +
+                                (partial != 0 ? $" and {partial} bytes of a partial pose" : ""));
             // The poses are read as one span of bytes, which holds at most int.MaxValue of them.
             if (whole > int.MaxValue / RecordSize)
                 throw Bad(path, $"{whole} poses ({body} bytes) are more than one recording read into memory holds " +
                                 $"(at most {int.MaxValue / RecordSize} poses)");
             var poses = new MocapPose[whole];
-            if (!BitConverter.IsLittleEndian) throw new PlatformNotSupportedException("pose recordings need a little-endian CPU");
             // Records are mocap_pose's bytes: read them straight into the array.
             var bytes = MemoryMarshal.AsBytes(poses.AsSpan());
             if (ReadFully(stream, bytes) != bytes.Length) throw Bad(path, "the file shrank while being read");
@@ -141,7 +160,7 @@ namespace Mocap.Imu.Recording
                 string field = FirstNonFinite(poses[i]);
                 if (field != null) throw Bad(path, $"pose {i}: {field} is not finite (a damaged file?)");
             }
-            return new PoseRecording(frameRate, skeleton, poses, contract);
+            return new PoseRecording(frameRate, skeleton, poses, contract) { DiscardedTailBytes = partial };
         }
 
         // The engine never writes NaN or infinity; a pose holding one comes from damage, and would

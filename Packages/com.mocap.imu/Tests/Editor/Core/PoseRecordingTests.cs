@@ -139,6 +139,13 @@ Frame Time: 0.04
             Assert.AreEqual(MocapStatus.NotFound, e.Status);
             var plain = BvhFile.Parse(head + "MOTION\nFrames: 1\nFrame Time: 0.1\n1 2 3\n", "x.bvh");
             AssertFormat(() => plain.SmplJointMap(), "no joint 'pelvis'");
+            Assert.AreEqual(0, plain.IgnoredTrailingLines);
+            // A streaming writer stopped before it rewrote the count: whole and partial lines
+            // after the counted frames are left out, and counted.
+            var cut = BvhFile.Parse(head + "MOTION\nFrames: 2\nFrame Time: 0.1\n1 2 3\n4 5 6\n7 8 9\n10 1", "x.bvh");
+            Assert.AreEqual(2, cut.FrameCount);
+            Assert.AreEqual(2, cut.IgnoredTrailingLines);
+            Assert.AreEqual(6f, cut.GetChannel(1, 2));
         }
 
         [Test]
@@ -210,7 +217,33 @@ Frame Time: 0.04
             var loaded = PoseRecording.Load(path);
             Assert.AreEqual(11, loaded.Poses.Length);
             Assert.AreEqual(_json[10].Sequence, loaded.Poses[10].Sequence);
+            Assert.AreEqual(0, loaded.DiscardedTailBytes);
             Assert.Throws<ObjectDisposedException>(() => writer.Append(in _json[0]));
+        }
+
+        [Test]
+        public void AWriterStoppedBetweenFlushesLeavesALoadableFile()
+        {
+            // The writer's file buffer hands the OS whatever fits, so between two flushes the file
+            // usually ends inside a record: what a crash (or a reader during recording) sees.
+            var path = Path.Combine(TestPaths.NewTempDirectory("crash"), "live.mcpose");
+            var writer = PoseRecordingWriter.Create(path, _model.Info);
+            writer.Append(_json.AsSpan(0, 3));
+            writer.Flush();
+            for (int i = 3; i < 10; i++) writer.Append(in _json[i]);   // one pose per frame, as recorded
+            long size = new FileInfo(path).Length;
+            long body = size - PoseRecording.HeaderSize;
+            Assert.AreNotEqual(0, body % PoseRecording.RecordSize, "the test needs a file ending inside a record");
+            var loaded = PoseRecording.Load(path);
+            Assert.AreEqual(body / PoseRecording.RecordSize, loaded.Poses.Length);
+            Assert.GreaterOrEqual(loaded.Poses.Length, 3);
+            Assert.AreEqual(body % PoseRecording.RecordSize, loaded.DiscardedTailBytes);
+            for (int i = 0; i < loaded.Poses.Length; i++)
+                Assert.AreEqual(_json[i].Sequence, loaded.Poses[i].Sequence, $"pose {i}");
+            writer.Dispose();
+            loaded = PoseRecording.Load(path);
+            Assert.AreEqual(10, loaded.Poses.Length);
+            Assert.AreEqual(0, loaded.DiscardedTailBytes);
         }
 
         [Test]
@@ -228,8 +261,14 @@ Frame Time: 0.04
             bad = (byte[])bytes.Clone();
             bad[8] = 9;
             AssertFormat(() => PoseRecording.Load(Write(dir, "version", bad)), "format version 9");
+            // Fewer whole poses than the header counts is damage; a partial pose beyond them is not.
             AssertFormat(() => PoseRecording.Load(Write(dir, "partial", bytes.AsSpan(0, bytes.Length - 10).ToArray())),
-                         "partial pose after pose 2");
+                         "the header says 3 poses, the file holds 2 and 750 bytes of a partial pose");
+            var longer = new byte[bytes.Length + 100];
+            bytes.CopyTo(longer, 0);
+            var tail = PoseRecording.Load(Write(dir, "tail", longer));
+            Assert.AreEqual(3, tail.Poses.Length);
+            Assert.AreEqual(100, tail.DiscardedTailBytes);
             AssertFormat(() => PoseRecording.Load(Write(dir, "missing", bytes.AsSpan(0, bytes.Length - 760).ToArray())),
                          "header says 3 poses, the file holds 2");
             bad = (byte[])bytes.Clone();

@@ -421,6 +421,9 @@ namespace Mocap.Imu.Tests
             Assert.Greater(final.BytesReceived, 0ul);
             Assert.AreEqual(final.BytesReceived, session.GetStats().BytesReceived, "GetStats keeps the final stats");
             Assert.AreEqual(final.BytesReceived, session.Stop().BytesReceived, "a second Stop returns them too");
+            // Read after the stop (a step can still finish on the bytes read before it), and
+            // readable while stopped: what the next Start restores.
+            Assert.AreEqual(0x3Fu, session.Calibration.ValidMask, "the calibration as the session stopped");
 
             session.Start();
             watch.Restart();

@@ -355,6 +355,30 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void ASessionIsHandedBackOnlyWhenTheSolverHasReallyClosed()
+        {
+            // Another thread inside a solver call (ResetCharacter, GetStats) holds a reference on
+            // the native handle, so Dispose only defers mocap_solver_close: until it runs, the
+            // inference thread still takes the session's frames and the session must stay the
+            // solver's. A reference taken here stands in for that call.
+            using var session = SolverReplay.OpenCalibratedReplay(_capture, _model.Info.FrameRate);
+            var solver = MocapSolver.Open(_model);
+            solver.AddCharacter(session);
+            solver.Start();
+            var handle = solver.NativeHandle;
+            bool added = false;
+            handle.DangerousAddRef(ref added);
+            Assert.IsTrue(added);
+            solver.Dispose();
+            var frame = default(MocapFrame);
+            Assert.Throws<InvalidOperationException>(() => session.PollLatest(ref frame), "still the solver's");
+            Assert.IsFalse(handle.IsClosed && handle.IsInvalid, "not closed yet");
+            handle.DangerousRelease();                    // the other call returns: the close runs
+            Assert.IsTrue(handle.IsClosed);
+            Assert.DoesNotThrow(() => session.PollLatest(ref frame), "the session is free again");
+        }
+
+        [Test]
         public void EngineRefusalsCarryTheEngineText()
         {
             var config = SessionConfig.Replay(_capture.CapturePath);
