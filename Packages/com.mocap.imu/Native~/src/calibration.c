@@ -631,7 +631,21 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save %s: %s", path, why);
 
     /* Write a sibling file and rename it over the target, so a crash or a full disk never
-     * leaves a half-written calibration behind. */
+     * leaves a half-written calibration behind. The target is the file itself: through a
+     * symbolic link (the link stays), and never a device, pipe or folder (the rename would
+     * replace /dev/full with a regular file, for example). */
+    char target[4096];
+    int resolve_err = mocap_replace_target(path, target, sizeof target);
+    if (resolve_err == -1)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                          "calibration file %s: not a regular file (a device, pipe or folder); "
+                          "not replaced", path);
+    if (resolve_err != 0) {
+        char text[128];
+        mocap_errno_text(resolve_err, text, sizeof text);
+        return mocap_fail(MOCAP_ERR_IO, "calibration file %s: cannot tell what to replace: %s", path, text);
+    }
+    path = target;
     /* Named per process and per call: two saves to one path at once (the API allows any
      * thread) must not write into one temporary file. */
     static mocap_atomic_u64 save_counter;

@@ -77,6 +77,11 @@ int mocap_remove_file(const char *path);
  * where rename() refuses to replace): at every moment one of the two files is complete.
  * 0 or an errno value. */
 int mocap_replace_file(const char *from, const char *to);
+/* The file a save that replaces `path` (a temporary renamed over it) must write: `path`, or the
+ * file a symbolic link there points to, so that the link stays a link. 0; -1 when an existing
+ * target is not a regular file (a device such as /dev/full, a pipe, a folder), which a rename
+ * would replace; an errno value (a dangling or looping link, a name too long for resolved). */
+int mocap_replace_target(const char *path, char *resolved, size_t resolved_cap);
 /* fflush, then ask the OS to put the file's data on the disk (fsync / _commit), so that a
  * rename that follows never exposes an empty file after a power loss. 0 or an errno value. */
 int mocap_flush_to_disk(FILE *f);

@@ -9,6 +9,9 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
+#include <stdio.h>
+#include <sys/stat.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -152,6 +155,25 @@ FILE *mocap_fopen(const char *path, const char *mode)
 }
 
 int mocap_remove_file(const char *path) { return remove(path); }
+
+int mocap_replace_target(const char *path, char *resolved, size_t resolved_cap)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0) {
+        if (errno != ENOENT) return errno;
+        if ((size_t)snprintf(resolved, resolved_cap, "%s", path) >= resolved_cap) return ENAMETOOLONG;
+        return 0; /* a new file */
+    }
+    if (S_ISLNK(st.st_mode)) {
+        char target[PATH_MAX];
+        if (!realpath(path, target)) return errno == ENOENT ? ENOENT : errno;
+        if (stat(target, &st) != 0) return errno;
+        if ((size_t)snprintf(resolved, resolved_cap, "%s", target) >= resolved_cap) return ENAMETOOLONG;
+    } else if ((size_t)snprintf(resolved, resolved_cap, "%s", path) >= resolved_cap) {
+        return ENAMETOOLONG;
+    }
+    return S_ISREG(st.st_mode) ? 0 : -1;
+}
 
 int mocap_replace_file(const char *from, const char *to)
 {

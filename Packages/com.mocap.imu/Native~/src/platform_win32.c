@@ -192,6 +192,19 @@ FILE *mocap_fopen(const char *path, const char *mode)
     return f;
 }
 
+int mocap_replace_target(const char *path, char *resolved, size_t resolved_cap)
+{
+    wchar_t wpath[WIDE_PATH_MAX];
+    if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0) return errno;
+    if ((size_t)snprintf(resolved, resolved_cap, "%s", path) >= resolved_cap) return ENAMETOOLONG;
+    DWORD attributes = GetFileAttributesW(wpath);
+    if (attributes == INVALID_FILE_ATTRIBUTES) return 0; /* a new file (or one we cannot see) */
+    if (attributes & (FILE_ATTRIBUTE_DIRECTORY | FILE_ATTRIBUTE_DEVICE)) return -1;
+    /* A symbolic link (reparse point) is replaced by MoveFileEx itself; Windows' links to files
+     * are rare enough here that the link is not followed. */
+    return 0;
+}
+
 int mocap_remove_file(const char *path)
 {
     wchar_t wpath[WIDE_PATH_MAX];

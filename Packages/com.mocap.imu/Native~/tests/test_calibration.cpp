@@ -16,6 +16,9 @@
 
 #include "test_support.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 extern "C" {
 #include "calibration.h"
 #include "error.h"
@@ -774,14 +777,45 @@ TEST(CalibrationFile, Utf8PathsAndAFailedReplaceIsReported)
     ASSERT_EQ(calib_load(path.c_str(), &loaded), MOCAP_OK) << mocap_last_error();
     EXPECT_EQ(std::memcmp(loaded.sensor_to_bone, cal.sensor_to_bone, sizeof cal.sensor_to_bone), 0);
 
-    // The target is a non-empty folder: the replace step must fail, not write around it.
+    // The target is a folder: refused before anything is written, not written around.
     std::string blocked = (dir / "blocked").u8string();
     std::filesystem::create_directories(std::filesystem::u8path(blocked + "/inside"));
-    EXPECT_EQ(calib_save(&cal, blocked.c_str()), MOCAP_ERR_IO);
-    EXPECT_NE(std::string(mocap_last_error()).find("cannot replace"), std::string::npos) << mocap_last_error();
+    EXPECT_EQ(calib_save(&cal, blocked.c_str()), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("not a regular file"), std::string::npos) << mocap_last_error();
     EXPECT_NE(std::string(mocap_last_error()).find("blocked"), std::string::npos) << mocap_last_error();
     EXPECT_EQ(temporaries_in(dir), 0);
     EXPECT_TRUE(std::filesystem::is_directory(std::filesystem::u8path(blocked + "/inside")));
+}
+
+// A save renames a temporary over its target: through a symbolic link it must replace the file
+// the link points to (the link stays), and it must never replace a device or a pipe (as root,
+// `--save-calibration /dev/full` turned /dev/full into a regular file).
+TEST(CalibrationFile, SaveFollowsLinksAndNeverReplacesDevicesOrPipes)
+{
+    Rig rig(53, MOCAP_WORLD_NWU);
+    static mocap_calibration cal, loaded;
+    calibrate(rig, cal);
+    const std::filesystem::path dir = test_temp_dir();
+    const std::filesystem::path target = dir / "real.cal", link = dir / "link.cal";
+    std::filesystem::create_symlink("real.cal", link);        // relative, dangling until saved
+    EXPECT_NE(calib_save(&cal, link.c_str()), MOCAP_OK);       // a dangling link: nothing to resolve
+    std::ofstream(target) << "old\n";
+    ASSERT_EQ(calib_save(&cal, link.c_str()), MOCAP_OK) << mocap_last_error();
+    EXPECT_TRUE(std::filesystem::is_symlink(link)) << "the link was replaced by a file";
+    ASSERT_EQ(calib_load(target.c_str(), &loaded), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(std::memcmp(loaded.sensor_to_bone, cal.sensor_to_bone, sizeof cal.sensor_to_bone), 0);
+    EXPECT_EQ(temporaries_in(dir), 0);
+
+    const std::filesystem::path fifo = dir / "pipe.cal";
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    EXPECT_EQ(calib_save(&cal, fifo.c_str()), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("not a regular file"), std::string::npos) << mocap_last_error();
+    EXPECT_TRUE(std::filesystem::is_fifo(fifo));
+    if (access("/dev/full", W_OK) == 0) {
+        EXPECT_EQ(calib_save(&cal, "/dev/full"), MOCAP_ERR_INVALID_ARGUMENT);
+        EXPECT_TRUE(std::filesystem::is_character_file("/dev/full"));
+    }
+    EXPECT_EQ(temporaries_in(dir), 0);
 }
 
 TEST(CalibrationFile, CorruptFilesRejectedWithLineNumbers)

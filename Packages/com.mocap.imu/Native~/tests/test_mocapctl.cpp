@@ -5,9 +5,11 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <regex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <pty.h>
 #include <termios.h>
@@ -184,6 +186,58 @@ TEST(Mocapctl, ACsvOnAFullDiskFailsTheReplay)
     CommandResult r = run_command("replay " + dir + "/c.cap --csv /dev/full");
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("writing /dev/full failed"), std::string::npos) << r.output;
+}
+
+// An output named like the capture being read would be emptied before it is read (a typo, a
+// wrong tab completion): refused before anything is opened, and the capture is untouched.
+TEST(Mocapctl, AnOutputThatIsTheCaptureBeingReadIsRefused)
+{
+    std::string dir = test_temp_dir();
+    const std::string cap = dir + "/c.cap";
+    ASSERT_EQ(run_command("synth --out " + cap + " --truth " + dir + "/t.csv --seconds 1").exit_code, 0);
+    const std::vector<uint8_t> before = read_file_bytes(cap);
+    ASSERT_GT(before.size(), 1000u);
+    for (const char *opt : {"--csv", "--json", "--out", "--pose-csv", "--save-calibration"}) {
+        SCOPED_TRACE(opt);
+        // Another spelling of the same file counts too.
+        CommandResult r = run_command("replay " + cap + " " + opt + " " + dir + "/./c.cap");
+        EXPECT_EQ(r.exit_code, 2) << r.output;
+        EXPECT_NE(r.output.find("is the capture this command reads"), std::string::npos) << r.output;
+        EXPECT_EQ(read_file_bytes(cap), before);
+    }
+    CommandResult r = run_command("replay " + cap + " --truth " + dir + "/t.csv --csv " + dir + "/t.csv");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    r = run_command("synth --out " + dir + "/s.cap --truth " + dir + "/s.cap");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("name the same file"), std::string::npos) << r.output;
+}
+
+// A missing value or a number that is not one is a usage error (exit 2) that names the option;
+// before, `--seconds abc` was 0 seconds and `--out --seconds 1` wrote a file called --seconds.
+TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
+{
+    std::string dir = test_temp_dir();
+    const struct {
+        std::string args, expect;
+    } cases[] = {
+        {"synth --out " + dir + "/a.cap --seconds abc", "--seconds wants a number, got 'abc'"},
+        {"synth --out " + dir + "/a.cap --seconds", "--seconds needs a value"},
+        {"synth --out --seconds 1", "--out needs a value, not the option --seconds"},
+        {"synth --out " + dir + "/a.cap --seconds -3", "--seconds -3 is outside"},
+        {"synth --out " + dir + "/a.cap --seed 1x", "--seed wants a whole number"},
+        {"synth --out " + dir + "/a.cap --corrupt 2", "--corrupt 2 is outside 0..1"},
+        {"record --port /dev/null --out " + dir + "/r.cap --seconds nan", "--seconds wants a number"},
+        {"replay " + dir + "/a.cap --rate 0", "--rate 0 is outside 1..1000"},
+        {"bench latency --threads 100000", "--threads 100000 is outside 1..256"},
+    };
+    for (const auto &c : cases) {
+        CommandResult r = run_command(c.args);
+        EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << "\n" << r.output;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
+    EXPECT_FALSE(std::filesystem::exists(dir + "/r.cap")) << "a refused record left a capture";
+    EXPECT_FALSE(std::filesystem::exists("--seconds"));
 }
 
 TEST(Mocapctl, LiveOnAWrongPortNamesIt)

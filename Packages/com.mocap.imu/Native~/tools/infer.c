@@ -34,6 +34,7 @@
 #include "mocap_imu.h"
 #include "onnx_runtime.h"
 #include "platform.h"
+#include "cli_args.h"
 
 #define BUNDLE_MAGIC "MOCAPTNS"
 #define BUNDLE_VERSION 1u
@@ -53,19 +54,8 @@ typedef struct bundle {
     tensor t[BUNDLE_MAX_TENSORS];
 } bundle;
 
-static const char *opt(int argc, char **argv, const char *name)
-{
-    for (int i = 0; i + 1 < argc; ++i)
-        if (strcmp(argv[i], name) == 0) return argv[i + 1];
-    return NULL;
-}
-
-static int flag(int argc, char **argv, const char *name)
-{
-    for (int i = 0; i < argc; ++i)
-        if (strcmp(argv[i], name) == 0) return 1;
-    return 0;
-}
+static const char *opt(int argc, char **argv, const char *name) { return cli_value(argc, argv, name); }
+static int flag(int argc, char **argv, const char *name) { return cli_flag(argc, argv, name); }
 
 static int report(mocap_status st, const char *what)
 {
@@ -294,15 +284,14 @@ static int cmd_infer(int argc, char **argv)
     const char *threads_arg = opt(argc, argv, "--threads");
     const char *opt_arg = opt(argc, argv, "--opt");
     const char *provider = opt(argc, argv, "--provider");
-    const char *repeat_arg = opt(argc, argv, "--repeat");
-    int repeat = repeat_arg ? atoi(repeat_arg) : 1;
-    if (repeat < 1) repeat = 1;
+    const int repeat = (int)cli_integer(argc, argv, "--repeat", 1, 1, 1000000);
 
     ort_options o;
     ort_options_defaults(&o);
     o.library_path = opt(argc, argv, "--ort");
-    if (threads_arg) o.intra_op_threads = atoi(threads_arg);
-    if (opt_arg) o.optimization_level = atoi(opt_arg);
+    /* ONNX Runtime starts every intra-op thread asked for: 100,000 would never finish. */
+    if (threads_arg) o.intra_op_threads = (int)cli_integer(argc, argv, "--threads", 0, 1, 256);
+    if (opt_arg) o.optimization_level = (int)cli_integer(argc, argv, "--opt", 0, 0, 99);
     if (provider && strcmp(provider, "cuda") == 0) o.provider = ORT_PROVIDER_CUDA;
     else if (provider && strcmp(provider, "cpu") != 0) {
         fprintf(stderr, "mocapctl: --provider must be cpu or cuda\n");
@@ -332,13 +321,13 @@ static int cmd_infer(int argc, char **argv)
         fprintf(stderr, "mocapctl: %s holds no frames\n", in_path);
         goto done;
     }
-    if (batch_arg && atoi(batch_arg) != B) {
+    if (batch_arg && cli_integer(argc, argv, "--batch", 0, 1, 1 << 20) != B) {
         fprintf(stderr, "mocapctl: --batch %s but %s holds %d characters\n", batch_arg, in_path, B);
         goto done;
     }
     int T = N;
     if (flag(argc, argv, "--stream")) T = 1;
-    else if (frames_arg) T = atoi(frames_arg);
+    else if (frames_arg) T = (int)cli_integer(argc, argv, "--frames", 1, 1, 1 << 30);
     if (T < 1) {
         fprintf(stderr, "mocapctl: --frames must be at least 1\n");
         goto done;

@@ -43,6 +43,7 @@
 #endif
 
 #include "bench.h"
+#include "cli_args.h"
 #include "bvh_writer.h"
 #include "capture_file.h"
 #include "mocap_imu.h"
@@ -90,19 +91,9 @@ static int usage(void)
     return 2;
 }
 
-static const char *arg_value(int argc, char **argv, const char *name)
-{
-    for (int i = 0; i + 1 < argc; ++i)
-        if (strcmp(argv[i], name) == 0) return argv[i + 1];
-    return NULL;
-}
-
-static int arg_flag(int argc, char **argv, const char *name)
-{
-    for (int i = 0; i < argc; ++i)
-        if (strcmp(argv[i], name) == 0) return 1;
-    return 0;
-}
+/* Options: cli_args.c (a missing value or a bad number is a usage error, exit 2). */
+static const char *arg_value(int argc, char **argv, const char *name) { return cli_value(argc, argv, name); }
+static int arg_flag(int argc, char **argv, const char *name) { return cli_flag(argc, argv, name); }
 
 static int fail(mocap_status st, const char *what)
 {
@@ -194,18 +185,16 @@ static int cmd_synth(int argc, char **argv)
     const char *out = arg_value(argc, argv, "--out");
     if (!out) return usage();
     const char *truth = arg_value(argc, argv, "--truth");
+    static const char *const synth_outputs[] = {"--out", "--truth", NULL};
+    cli_refuse_overwriting(arg_value(argc, argv, "--trajectory"), "trajectory", argc, argv, synth_outputs);
     const char *motion_name = arg_value(argc, argv, "--motion");
     const char *world = arg_value(argc, argv, "--world");
     const char *noise = arg_value(argc, argv, "--noise");
-    const char *seconds = arg_value(argc, argv, "--seconds");
-    const char *seed = arg_value(argc, argv, "--seed");
-    const char *corrupt = arg_value(argc, argv, "--corrupt");
-    const char *dropout = arg_value(argc, argv, "--dropout");
 
     synth_config cfg;
     synth_config_defaults(&cfg);
-    if (seed) cfg.seed = strtoull(seed, NULL, 10);
-    if (seconds) cfg.motion_s = atof(seconds);
+    cfg.seed = cli_u64(argc, argv, "--seed", cfg.seed);
+    cfg.motion_s = cli_number(argc, argv, "--seconds", cfg.motion_s, 0.0, 86400.0);
     if (world && strcmp(world, "enu") == 0) cfg.world_frame = MOCAP_WORLD_ENU;
     else if (world && strcmp(world, "nwu") != 0) {
         fprintf(stderr, "mocapctl: --world must be nwu or enu\n");
@@ -222,8 +211,8 @@ static int cmd_synth(int argc, char **argv)
         fprintf(stderr, "mocapctl: --noise must be none or realistic\n");
         return 2;
     }
-    if (corrupt) cfg.corrupt_byte_prob = atof(corrupt);
-    if (dropout) cfg.node_dropout_prob = atof(dropout);
+    cfg.corrupt_byte_prob = cli_number(argc, argv, "--corrupt", cfg.corrupt_byte_prob, 0.0, 1.0);
+    cfg.node_dropout_prob = cli_number(argc, argv, "--dropout", cfg.node_dropout_prob, 0.0, 1.0);
 
     synth_trajectory *traj = NULL;
     synth_motion_fn motion = NULL;
@@ -234,7 +223,7 @@ static int cmd_synth(int argc, char **argv)
         if (st != MOCAP_OK) return fail(st, "loading trajectory");
         motion = synth_trajectory_motion;
         motion_user = traj;
-        if (!seconds) cfg.motion_s = synth_trajectory_duration(traj);
+        if (!arg_value(argc, argv, "--seconds")) cfg.motion_s = synth_trajectory_duration(traj);
     } else {
         motion = synth_builtin_motion(motion_name ? motion_name : "mixed");
         if (!motion) {
@@ -537,6 +526,11 @@ static int cmd_replay(int argc, char **argv)
 {
     if (argc < 1 || argv[0][0] == '-') return usage();
     const char *capture = argv[0];
+    /* Before any output is opened (they are opened for writing before the capture is read). */
+    static const char *const replay_outputs[] = {"--csv", "--json", "--out", "--pose-csv",
+                                                 "--save-calibration", NULL};
+    cli_refuse_overwriting(capture, "capture", argc, argv, replay_outputs);
+    cli_refuse_overwriting(arg_value(argc, argv, "--truth"), "truth file", argc, argv, replay_outputs);
     const char *truth_path = arg_value(argc, argv, "--truth");
     const char *cal_path = arg_value(argc, argv, "--calibration");
     const char *save_cal = arg_value(argc, argv, "--save-calibration");
@@ -575,7 +569,7 @@ static int cmd_replay(int argc, char **argv)
     cfg.source_kind = MOCAP_SOURCE_REPLAY;
     snprintf(cfg.path, sizeof cfg.path, "%s", capture);
     cfg.replay_realtime = arg_flag(argc, argv, "--realtime");
-    if (rate) cfg.output_rate_hz = (float)atof(rate);
+    if (rate) cfg.output_rate_hz = (float)cli_number(argc, argv, "--rate", 60.0, 1.0, 1000.0);
 
     mocap_status s;
     if (open_replay_session(capture, &cfg, prelude, cal_path, &st->session) != 0) goto done;
@@ -1314,12 +1308,11 @@ static int cmd_bench_model(const char *which, int argc, char **argv)
             o.repo_root = root;
         }
     }
-    const char *v;
-    o.seconds = (v = arg_value(argc, argv, "--seconds")) ? atof(v) : 30.0;
-    o.latency_seconds = (v = arg_value(argc, argv, "--latency-seconds")) ? atof(v) : 10.0;
-    o.tip_seconds = (v = arg_value(argc, argv, "--tip-seconds")) ? atof(v) : 3.0;
-    o.threads = (v = arg_value(argc, argv, "--threads")) ? atoi(v) : 1;
-    o.max_characters = (v = arg_value(argc, argv, "--max-characters")) ? atoi(v) : 32;
+    o.seconds = cli_number(argc, argv, "--seconds", 30.0, 0.1, 86400.0);
+    o.latency_seconds = cli_number(argc, argv, "--latency-seconds", 10.0, 0.1, 86400.0);
+    o.tip_seconds = cli_number(argc, argv, "--tip-seconds", 3.0, 0.1, 86400.0);
+    o.threads = (int)cli_integer(argc, argv, "--threads", 1, 1, 256);
+    o.max_characters = (int)cli_integer(argc, argv, "--max-characters", 32, 1, MOCAP_MAX_CHARACTERS);
     if (!(o.seconds > 0) || o.max_characters < 1 || o.max_characters > MOCAP_MAX_CHARACTERS) {
         fprintf(stderr, "mocapctl bench: --seconds > 0 and --max-characters 1..%d\n", MOCAP_MAX_CHARACTERS);
         return 2;
@@ -1342,7 +1335,7 @@ static int open_live(int argc, char **argv, const char *record_path, float rate_
     mocap_config_defaults(&cfg);
     cfg.source_kind = MOCAP_SOURCE_SERIAL;
     snprintf(cfg.path, sizeof cfg.path, "%s", port);
-    if (baud) cfg.baud = (uint32_t)strtoul(baud, NULL, 10);
+    if (baud) cfg.baud = (uint32_t)cli_integer(argc, argv, "--baud", 0, 50, 16000000);
     if (record_path) snprintf(cfg.capture_path, sizeof cfg.capture_path, "%s", record_path);
     if (rate_hz > 0) cfg.output_rate_hz = rate_hz;
     mocap_status s = mocap_session_open(&cfg, out);
@@ -1504,7 +1497,10 @@ static int cmd_live(int argc, char **argv)
     mocap_solver_config solver_config;
     if (solver_config_from_args(argc, argv, &solver_config) != 0) return 2;
     const char *record = arg_value(argc, argv, "--record");
-    const char *seconds = arg_value(argc, argv, "--seconds");
+    static const char *const live_outputs[] = {"--record", NULL};
+    cli_refuse_overwriting(arg_value(argc, argv, "--port"), "serial port", argc, argv, live_outputs);
+    /* Read before anything is opened: a bad value must not leave an empty capture behind. */
+    const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
     const int with_model = arg_value(argc, argv, "--model") != NULL || arg_flag(argc, argv, "--pose");
     mocap_model *model = NULL;
     mocap_model_info info;
@@ -1514,7 +1510,6 @@ static int cmd_live(int argc, char **argv)
         mocap_model_close(model);
         return 1;
     }
-    double limit = seconds ? atof(seconds) : 1e30;
     int rc = 0;
     for (int attempt = 0; attempt < 3; ++attempt) {
         rc = guided_step(session, MOCAP_CALIBRATION_HEADING,
@@ -1551,11 +1546,13 @@ static int cmd_live(int argc, char **argv)
 static int cmd_record(int argc, char **argv)
 {
     const char *out = arg_value(argc, argv, "--out");
-    const char *seconds = arg_value(argc, argv, "--seconds");
+    /* Read before anything is opened: a bad value must not leave an empty capture behind. */
+    const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
     if (!out) return usage();
+    static const char *const record_outputs[] = {"--out", NULL};
+    cli_refuse_overwriting(arg_value(argc, argv, "--port"), "serial port", argc, argv, record_outputs);
     mocap_session *session = NULL;
     if (open_live(argc, argv, out, 0.0f, &session) != 0) return 1;
-    double limit = seconds ? atof(seconds) : 1e30;
     printf("recording to %s; Ctrl-C to stop\n", out);
     show_status_until(session, limit);
     /* Stop first: the final flush and the close are where a full disk often shows. */
@@ -1601,7 +1598,8 @@ static int cmd_stream(int argc, char **argv)
     int nrep = arg_values(argc, argv, "--replay", replays, STREAM_MAX);
     const char *port = arg_value(argc, argv, "--port");
     const char *rate = arg_value(argc, argv, "--rate");
-    const char *seconds = arg_value(argc, argv, "--seconds");
+    /* Read before anything is opened: a bad value must not leave an empty capture behind. */
+    const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
     const char *speed = arg_value(argc, argv, "--speed");
     const char *prelude = arg_value(argc, argv, "--prelude");
     mocap_solver_config solver_config;
@@ -1623,7 +1621,7 @@ static int cmd_stream(int argc, char **argv)
     }
     mocap_vmc_options vopt;
     mocap_vmc_options_defaults(&vopt);
-    if (rate) vopt.max_rate_hz = (float)atof(rate);
+    if (rate) vopt.max_rate_hz = (float)cli_number(argc, argv, "--rate", 60.0, 0.1, 1000.0);
     vopt.allow_remote = arg_flag(argc, argv, "--allow-remote");
 
     int rc = 1;
@@ -1666,7 +1664,7 @@ static int cmd_stream(int argc, char **argv)
             cfg.source_kind = MOCAP_SOURCE_REPLAY;
             snprintf(cfg.path, sizeof cfg.path, "%s", replays[i]);
             cfg.replay_realtime = arg_flag(argc, argv, "--realtime") || speed != NULL;
-            if (speed) cfg.replay_speed = (float)atof(speed);
+            if (speed) cfg.replay_speed = (float)cli_number(argc, argv, "--speed", 1.0, 0.01, 1000.0);
             cfg.output_rate_hz = info.frame_rate;
             if (open_replay_session(replays[i], &cfg, prelude, NULL, &sessions[i]) != 0) goto done;
         }
@@ -1685,7 +1683,6 @@ static int cmd_stream(int argc, char **argv)
                dests[i], (double)vopt.max_rate_hz);
     fflush(stdout);
 
-    const double limit = seconds ? atof(seconds) : 1e30;
     const int64_t start = mocap_monotonic_ns();
     uint64_t send_errors = 0;
     int running = characters;
@@ -1758,9 +1755,8 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "bench") == 0) {
         if (argc < 3) return usage();
         if (strcmp(argv[2], "decode") == 0) {
-            const char *seconds = arg_value(argc - 3, argv + 3, "--seconds");
             double mbps = 0;
-            return mocapctl_bench_decode(seconds ? atof(seconds) : 3.0, &mbps);
+            return mocapctl_bench_decode(cli_number(argc - 3, argv + 3, "--seconds", 3.0, 0.1, 86400.0), &mbps);
         }
         return cmd_bench_model(argv[2], argc - 3, argv + 3);
     }

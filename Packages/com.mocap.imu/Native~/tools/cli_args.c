@@ -1,0 +1,113 @@
+/* Command-line option reading for mocapctl (cli_args.h). */
+#include "cli_args.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if !defined(_WIN32)
+#include <sys/stat.h>
+#endif
+
+static void usage_exit(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fputs("mocapctl: ", stderr);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+    exit(2);
+}
+
+const char *cli_value(int argc, char **argv, const char *name)
+{
+    for (int i = 0; i < argc; ++i) {
+        if (strcmp(argv[i], name) != 0) continue;
+        if (i + 1 >= argc) usage_exit("%s needs a value", name);
+        if (strncmp(argv[i + 1], "--", 2) == 0)
+            usage_exit("%s needs a value, not the option %s", name, argv[i + 1]);
+        return argv[i + 1];
+    }
+    return NULL;
+}
+
+int cli_flag(int argc, char **argv, const char *name)
+{
+    for (int i = 0; i < argc; ++i)
+        if (strcmp(argv[i], name) == 0) return 1;
+    return 0;
+}
+
+double cli_number(int argc, char **argv, const char *name, double fallback, double lo, double hi)
+{
+    const char *text = cli_value(argc, argv, name);
+    if (!text) return fallback;
+    char *end = NULL;
+    errno = 0;
+    double v = strtod(text, &end);
+    if (end == text || *end != '\0' || errno == ERANGE || !isfinite(v))
+        usage_exit("%s wants a number, got '%s'", name, text);
+    if (v < lo || v > hi) usage_exit("%s %s is outside %g..%g", name, text, lo, hi);
+    return v;
+}
+
+long long cli_integer(int argc, char **argv, const char *name, long long fallback, long long lo,
+                      long long hi)
+{
+    const char *text = cli_value(argc, argv, name);
+    if (!text) return fallback;
+    char *end = NULL;
+    errno = 0;
+    long long v = strtoll(text, &end, 10);
+    if (end == text || *end != '\0' || errno == ERANGE)
+        usage_exit("%s wants a whole number, got '%s'", name, text);
+    if (v < lo || v > hi) usage_exit("%s %s is outside %lld..%lld", name, text, lo, hi);
+    return v;
+}
+
+unsigned long long cli_u64(int argc, char **argv, const char *name, unsigned long long fallback)
+{
+    const char *text = cli_value(argc, argv, name);
+    if (!text) return fallback;
+    char *end = NULL;
+    errno = 0;
+    unsigned long long v = strtoull(text, &end, 10);
+    if (end == text || *end != '\0' || errno == ERANGE || text[0] == '-')
+        usage_exit("%s wants a whole number from 0 to 2^64-1, got '%s'", name, text);
+    return v;
+}
+
+/* Both paths name one existing file (the same device and inode: links and other spellings
+ * included). Windows has no inode numbers in stat: there, only identical text counts. */
+static int same_file(const char *a, const char *b)
+{
+    if (strcmp(a, b) == 0) return 1;
+#if !defined(_WIN32)
+    struct stat sa, sb;
+    if (stat(a, &sa) != 0 || stat(b, &sb) != 0) return 0;
+    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+#else
+    return 0;
+#endif
+}
+
+void cli_refuse_overwriting(const char *input, const char *input_what, int argc, char **argv,
+                            const char *const *outputs)
+{
+    for (int i = 0; outputs[i]; ++i) {
+        const char *out = cli_value(argc, argv, outputs[i]);
+        if (!out) continue;
+        if (input && same_file(out, input))
+            usage_exit("%s %s is the %s this command reads: writing it would destroy it", outputs[i],
+                       out, input_what);
+        for (int j = 0; j < i; ++j) {
+            const char *other = cli_value(argc, argv, outputs[j]);
+            if (other && same_file(out, other))
+                usage_exit("%s and %s name the same file (%s)", outputs[j], outputs[i], out);
+        }
+    }
+}

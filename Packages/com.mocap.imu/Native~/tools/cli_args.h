@@ -1,0 +1,27 @@
+/* Command-line options of mocapctl's commands. A mistake in the command line (an option without
+ * its value, a number that is not one or is out of range) is a usage error: printed once as
+ * "mocapctl: ...", exit status 2, before the command opens or writes anything. */
+#ifndef MOCAPCTL_CLI_ARGS_H
+#define MOCAPCTL_CLI_ARGS_H
+
+/* The value after `name`, or NULL when `name` is not given. `name` as the last argument, or
+ * followed by another --option, is a usage error (the option would silently lose its value, or
+ * take the next option's name as a file name). */
+const char *cli_value(int argc, char **argv, const char *name);
+int cli_flag(int argc, char **argv, const char *name);
+/* A number option: `fallback` when absent; otherwise the whole value must be a finite number
+ * within [lo, hi]. */
+double cli_number(int argc, char **argv, const char *name, double fallback, double lo, double hi);
+/* The same for a whole number. */
+long long cli_integer(int argc, char **argv, const char *name, long long fallback, long long lo,
+                      long long hi);
+/* An unsigned 64-bit whole number (seeds). */
+unsigned long long cli_u64(int argc, char **argv, const char *name, unsigned long long fallback);
+
+/* Usage error when an output option names the file `input` (an existing file read by the
+ * command: a capture, a truth file), or two outputs name one file: opening the output for
+ * writing would empty the input before it is read. `outputs` ends with NULL. */
+void cli_refuse_overwriting(const char *input, const char *input_what, int argc, char **argv,
+                            const char *const *outputs);
+
+#endif
