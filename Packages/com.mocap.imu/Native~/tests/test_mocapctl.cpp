@@ -240,6 +240,21 @@ TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
     EXPECT_FALSE(std::filesystem::exists("--seconds"));
 }
 
+// A command blocked in I/O (here: opening a named pipe nobody reads) cannot act on the first
+// Ctrl-C; the second ends it.
+TEST(Mocapctl, ASecondCtrlCEndsACommandBlockedInIo)
+{
+    std::string dir = test_temp_dir();
+    // The outer timeout only guards the test; the answer is the command's own exit status.
+    CommandResult r = run_shell("cd '" + dir + "' && mkfifo pipe && timeout -s KILL 20 sh -c '" +
+                                std::string(MOCAP_MOCAPCTL) +
+                                " synth --out pipe --seconds 1 & pid=$!; sleep 1; kill -INT $pid; "
+                                "sleep 0.5; kill -0 $pid && echo still-running-after-one; kill -INT $pid; "
+                                "wait $pid; echo rc=$?'");
+    EXPECT_NE(r.output.find("still-running-after-one"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("rc=130"), std::string::npos) << r.output;   // ended by SIGINT, not by KILL
+}
+
 TEST(Mocapctl, LiveOnAWrongPortNamesIt)
 {
     CommandResult r = run_command("live --port /dev/ttyNOPE0 --seconds 1");

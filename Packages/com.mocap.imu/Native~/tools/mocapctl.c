@@ -61,7 +61,18 @@ static int cmd_stream(int argc, char **argv);
 int mocapctl_onnx(const char *cmd, int argc, char **argv); /* tools/infer.c */
 
 static volatile sig_atomic_t interrupted = 0;
-static void on_interrupt(int sig) { (void)sig; interrupted = 1; }
+/* The first Ctrl-C asks the command to finish (flush, close, report); a second one ends the
+ * process at once, for a command blocked in I/O that cannot see the first (opening a named pipe
+ * nobody writes, writing to a terminal nobody reads). */
+static void on_interrupt(int sig)
+{
+    if (interrupted) {
+        signal(sig, SIG_DFL);
+        raise(sig);
+        return;
+    }
+    interrupted = 1;
+}
 
 static int usage(void)
 {
