@@ -465,6 +465,29 @@ static int replay_ended_early(mocap_session *session)
     return 1;
 }
 
+/* The replay skips damaged chunks and a cut-off end without a word (the reader resynchronises,
+ * as it must for a crash-damaged file); say so after the run, so that output made from part of
+ * a capture is not taken for the whole. Reads the capture's chunk structure once more (fast). */
+static void report_capture_damage(const char *capture)
+{
+    capture_reader *r = NULL;
+    if (capture_reader_open(capture, &r) != MOCAP_OK) return;
+    int64_t ns;
+    const uint8_t *data;
+    size_t len;
+    while (capture_reader_next(r, &ns, &data, &len) == MOCAP_OK) {
+    }
+    const uint64_t skipped = capture_reader_skipped(r);
+    const int tail = capture_reader_tail(r);
+    if (skipped > 0)
+        fprintf(stderr, "mocapctl: warning: capture %s: %llu damaged chunk(s) were skipped; what they "
+                        "held is missing from the results\n", capture, (unsigned long long)skipped);
+    if (tail)
+        fprintf(stderr, "mocapctl: warning: capture %s ends in a damaged or incomplete chunk (a "
+                        "recording cut short?); its last records are missing from the results\n", capture);
+    capture_reader_close(r);
+}
+
 /* Drains available frames; returns 1 at the end of the stream. */
 static int pump(replay_state *st)
 {
@@ -632,6 +655,7 @@ static int cmd_replay(int argc, char **argv)
         printf("  bone orientation error against the generator's truth (motion phase): worst sensor "
                "mean %.3f deg\n", worst_mean);
     rc = replay_ended_early(st->session);
+    report_capture_damage(capture);
     if (close_output(&st->csv, csv_path)) rc = 1;
 done:
     if (st->session) mocap_session_close(st->session);
@@ -1272,6 +1296,7 @@ static int cmd_replay_pose(int argc, char **argv)
     if (written == 0) fprintf(stderr, "mocapctl: no pose was solved (calibration %s)\n",
                               cal_failed ? "refused" : "missing");
     if (replay_ended_early(session)) rc = 1;
+    report_capture_damage(capture);
     if (report_inference_failures(solver)) rc = 1;
 done:
     /* Solver first (it consumes the session), then the session, then the model. */
@@ -1737,8 +1762,10 @@ static int cmd_stream(int argc, char **argv)
     }
     if (report_inference_failures(solver)) rc = 1;
     /* A replay whose file stopped reading part way streamed less than the capture holds. */
-    for (int i = 0; !port && i < nrep; ++i)
+    for (int i = 0; !port && i < nrep; ++i) {
         if (replay_ended_early(sessions[i])) rc = 1;
+        report_capture_damage(replays[i]);
+    }
 done:
     if (solver) mocap_solver_close(solver);
     for (int i = 0; i < STREAM_MAX; ++i) {
