@@ -177,8 +177,11 @@ mocap_status ort_library_load(const char *library_path)
     const char *env = getenv("MOCAP_ONNXRUNTIME_PATH");
     if (library_path && library_path[0]) {
         candidates[n++] = library_path; /* an explicit path is the only one tried */
+    } else if (env && env[0]) {
+        /* So is the variable: a typo in it must not quietly load another build (a CPU one in
+         * place of the CUDA one asked for). */
+        candidates[n++] = env;
     } else {
-        if (env && env[0]) candidates[n++] = env;
 #if defined(MOCAP_ONNXRUNTIME_DEFAULT_LIB)
         candidates[n++] = MOCAP_ONNXRUNTIME_DEFAULT_LIB;
 #endif

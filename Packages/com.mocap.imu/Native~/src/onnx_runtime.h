@@ -32,10 +32,11 @@ extern "C" {
 #define ORT_JOINTS 24
 #define ORT_NAME_CAP 32
 
-/* Load ONNX Runtime once per process. library_path: a file to load; NULL tries, in order, the
- * environment variable MOCAP_ONNXRUNTIME_PATH, the library fetched by
- * scripts/fetch_onnxruntime.sh (the path configured at build time) and the platform's standard
- * names (libonnxruntime.so.1 / libonnxruntime.so, libonnxruntime.dylib, onnxruntime.dll).
+/* Load ONNX Runtime once per process. library_path: a file to load (the only one tried); NULL
+ * loads the environment variable MOCAP_ONNXRUNTIME_PATH when it is set (again the only one
+ * tried), else tries the library fetched by scripts/fetch_onnxruntime.sh (the path configured at
+ * build time) and the platform's standard names (libonnxruntime.so.1 / libonnxruntime.so,
+ * libonnxruntime.dylib, onnxruntime.dll).
  * Later calls return the first result (a different path after a success is ignored). */
 mocap_status ort_library_load(const char *library_path);
 /* 1 when ort_library_load(library_path) succeeds (never prints; leaves the error text set). */

@@ -381,6 +381,13 @@ TEST(OnnxRuntime, MocapctlInferStreamMatchesWholeClip)
                                   "/wrong_version.onnx 2>&1");
     EXPECT_NE(bad.find("contract_version is '2'"), std::string::npos) << bad;
     EXPECT_EQ(bad.find("rc=0"), std::string::npos) << bad;
+    // A mistyped MOCAP_ONNXRUNTIME_PATH is an error naming it, not a quiet fall back to the
+    // fetched build (which would have loaded here).
+    std::string typo = run_capture("MOCAP_ONNXRUNTIME_PATH=/nonexistent/libonnxruntime-cuda.so " +
+                                   std::string(MOCAP_MOCAPCTL) + " model-info " + dir + "/valid.onnx 2>&1");
+    EXPECT_EQ(typo.find("rc=0"), std::string::npos) << typo;
+    EXPECT_NE(typo.find("/nonexistent/libonnxruntime-cuda.so"), std::string::npos) << typo;
+    EXPECT_EQ(typo.find("right_hand"), std::string::npos) << typo;
 }
 
 // The model the package ships (untrained or trained): valid, and streaming == whole clip.
