@@ -238,6 +238,13 @@ TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
     EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
     EXPECT_FALSE(std::filesystem::exists(dir + "/r.cap")) << "a refused record left a capture";
     EXPECT_FALSE(std::filesystem::exists("--seconds"));
+    // Asked for, the usage is an answer: stdout, status 0; after a mistake, stderr and 2.
+    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " --help 2>/dev/null)");
+    EXPECT_EQ(help.exit_code, 0);
+    EXPECT_NE(help.output.find("mocapctl replay CAPTURE"), std::string::npos) << help.output;
+    CommandResult wrong = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " frobnicate 2>/dev/null)");
+    EXPECT_EQ(wrong.exit_code, 2);
+    EXPECT_EQ(wrong.output.find("usage"), std::string::npos) << wrong.output;
 }
 
 // A command blocked in I/O (here: opening a named pipe nobody reads) cannot act on the first

@@ -74,9 +74,10 @@ static void on_interrupt(int sig)
     interrupted = 1;
 }
 
-static int usage(void)
+/* The usage text: asked for (--help) on stdout with status 0, after a mistake on stderr with 2. */
+static int print_usage(FILE *to, int status)
 {
-    fprintf(stderr,
+    fprintf(to,
             "usage:\n"
             "  mocapctl synth --out CAPTURE [--truth CSV] [--motion walk|arms|squat|turn|mixed]\n"
             "                 [--seconds S] [--world nwu|enu] [--noise none|realistic] [--seed N]\n"
@@ -99,8 +100,10 @@ static int usage(void)
             "                 [--threads N] [--opt 0-3] [--provider cpu|cuda] [--repeat R]\n"
             "  mocapctl model-info M.onnx\n"
             "  mocapctl version\n");
-    return 2;
+    return status;
 }
+
+static int usage(void) { return print_usage(stderr, 2); }
 
 /* Options: cli_args.c (a missing value or a bad number is a usage error, exit 2). */
 static const char *arg_value(int argc, char **argv, const char *name) { return cli_value(argc, argv, name); }
@@ -1784,6 +1787,8 @@ int main(int argc, char **argv)
     if (argc < 2) return usage();
     signal(SIGINT, on_interrupt);
     const char *cmd = argv[1];
+    if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0)
+        return print_usage(stdout, 0);
     if (strcmp(cmd, "synth") == 0) return cmd_synth(argc - 2, argv + 2);
     if (strcmp(cmd, "replay") == 0) return cmd_replay(argc - 2, argv + 2);
     if (strcmp(cmd, "live") == 0) return cmd_live(argc - 2, argv + 2);
