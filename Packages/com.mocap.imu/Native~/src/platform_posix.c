@@ -166,7 +166,7 @@ int mocap_replace_target(const char *path, char *resolved, size_t resolved_cap)
     }
     if (S_ISLNK(st.st_mode)) {
         char target[PATH_MAX];
-        if (!realpath(path, target)) return errno == ENOENT ? ENOENT : errno;
+        if (!realpath(path, target)) return errno;
         if (stat(target, &st) != 0) return errno;
         if ((size_t)snprintf(resolved, resolved_cap, "%s", target) >= resolved_cap) return ENAMETOOLONG;
     } else if ((size_t)snprintf(resolved, resolved_cap, "%s", path) >= resolved_cap) {

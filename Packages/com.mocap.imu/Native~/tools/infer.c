@@ -279,10 +279,9 @@ static int cmd_infer(int argc, char **argv)
                         "[--repeat R] [--ort LIB]\n");
         return 2;
     }
-    const char *frames_arg = opt(argc, argv, "--frames");
-    const char *batch_arg = opt(argc, argv, "--batch");
-    const char *threads_arg = opt(argc, argv, "--threads");
-    const char *opt_arg = opt(argc, argv, "--opt");
+    /* Numbers first, before anything is read: 0 = not given (the whole clip, any batch). */
+    const int frames = (int)cli_integer(argc, argv, "--frames", 0, 1, 1 << 30);
+    const int batch = (int)cli_integer(argc, argv, "--batch", 0, 1, 1 << 20);
     const char *provider = opt(argc, argv, "--provider");
     const int repeat = (int)cli_integer(argc, argv, "--repeat", 1, 1, 1000000);
 
@@ -290,8 +289,8 @@ static int cmd_infer(int argc, char **argv)
     ort_options_defaults(&o);
     o.library_path = opt(argc, argv, "--ort");
     /* ONNX Runtime starts every intra-op thread asked for: 100,000 would never finish. */
-    if (threads_arg) o.intra_op_threads = (int)cli_integer(argc, argv, "--threads", 0, 1, 256);
-    if (opt_arg) o.optimization_level = (int)cli_integer(argc, argv, "--opt", 0, 0, 99);
+    o.intra_op_threads = (int)cli_integer(argc, argv, "--threads", o.intra_op_threads, 1, 256);
+    o.optimization_level = (int)cli_integer(argc, argv, "--opt", o.optimization_level, 0, 99);
     if (provider && strcmp(provider, "cuda") == 0) o.provider = ORT_PROVIDER_CUDA;
     else if (provider && strcmp(provider, "cpu") != 0) {
         fprintf(stderr, "mocapctl: --provider must be cpu or cuda\n");
@@ -321,17 +320,13 @@ static int cmd_infer(int argc, char **argv)
         fprintf(stderr, "mocapctl: %s holds no frames\n", in_path);
         goto done;
     }
-    if (batch_arg && cli_integer(argc, argv, "--batch", 0, 1, 1 << 20) != B) {
-        fprintf(stderr, "mocapctl: --batch %s but %s holds %d characters\n", batch_arg, in_path, B);
+    if (batch && batch != B) {
+        fprintf(stderr, "mocapctl: --batch %d but %s holds %d characters\n", batch, in_path, B);
         goto done;
     }
     int T = N;
     if (flag(argc, argv, "--stream")) T = 1;
-    else if (frames_arg) T = (int)cli_integer(argc, argv, "--frames", 1, 1, 1 << 30);
-    if (T < 1) {
-        fprintf(stderr, "mocapctl: --frames must be at least 1\n");
-        goto done;
-    }
+    else if (frames) T = frames;
     if (T > N) T = N;
 
     mocap_status st = ort_model_open(model_path, &o, &m);
