@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -245,6 +246,78 @@ TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
     CommandResult wrong = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " frobnicate 2>/dev/null)");
     EXPECT_EQ(wrong.exit_code, 2);
     EXPECT_EQ(wrong.output.find("usage"), std::string::npos) << wrong.output;
+}
+
+// A mistyped option was ignored: the command ran with the default it was meant to change
+// (`replay x.cap --sepeed 2`, `synth --seconds=5` made 30 s). Now it is refused before anything
+// runs or is written, naming the command and the option.
+TEST(Mocapctl, UnknownOptionsAreRefusedBeforeTheCommandRuns)
+{
+    std::string dir = test_temp_dir();
+    const struct {
+        std::string args, expect;
+    } cases[] = {
+        {"synth --out " + dir + "/a.cap --secnds 1", "synth has no option --secnds"},
+        {"synth --out " + dir + "/a.cap --seconds=5", "write '--seconds 5'"},
+        {"replay " + dir + "/a.cap --speed 2", "replay has no option --speed"},
+        {"record --port /dev/null --out " + dir + "/r.cap --model m.onnx", "record has no option --model"},
+        {"stream --vmc 127.0.0.1:1 --replay " + dir + "/a.cap --csv x", "stream has no option --csv"},
+        {"bench decode --threads 2", "bench decode has no option --threads"},
+        {"infer --model m.onnx --input i --output " + dir + "/o --frame 3", "infer has no option --frame"},
+        {"version --verbose", "version has no option --verbose"},
+    };
+    for (const auto &c : cases) {
+        CommandResult r = run_command(c.args);
+        EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << "\n" << r.output;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
+    EXPECT_FALSE(std::filesystem::exists(dir + "/r.cap"));
+    EXPECT_FALSE(std::filesystem::exists(dir + "/o"));
+    // A value that looks like an option name is the value, not an option: a file called
+    // --weird is still a file.
+    ASSERT_EQ(run_command("synth --seconds 1 --out " + dir + "/a.cap --truth " + dir + "/t.csv").exit_code, 0);
+    CommandResult negative = run_command("synth --out " + dir + "/b.cap --seconds -1");
+    EXPECT_NE(negative.output.find("--seconds -1 is outside"), std::string::npos) << negative.output;
+    // `--help` after a command is an answer too.
+    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " replay --help 2>/dev/null)");
+    EXPECT_EQ(help.exit_code, 0);
+    EXPECT_NE(help.output.find("mocapctl stream --vmc"), std::string::npos) << help.output;
+}
+
+// Every option the usage text shows is one its command takes: the list that refuses unknown
+// options and the help users read cannot drift apart.
+TEST(Mocapctl, EveryOptionInTheUsageTextIsAccepted)
+{
+    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " --help 2>/dev/null)");
+    ASSERT_EQ(help.exit_code, 0);
+    std::vector<std::pair<std::string, std::string>> pairs; // command words, option
+    std::string command;
+    std::istringstream lines(help.output);
+    const std::regex option("--[a-z][a-z-]*");
+    for (std::string line; std::getline(lines, line);) {
+        const size_t at = line.find("mocapctl ");
+        if (at != std::string::npos) {
+            std::istringstream words(line.substr(at + 9));
+            std::string first, second;
+            words >> first >> second;
+            command = first;
+            // bench's first word chooses between two option sets: decode, and the model benches.
+            if (first == "bench") command += second.rfind("decode", 0) == 0 ? " decode" : " latency";
+        }
+        if (command.empty()) continue;
+        for (std::sregex_iterator it(line.begin(), line.end(), option), end; it != end; ++it)
+            pairs.emplace_back(command, it->str());
+    }
+    ASSERT_GT(pairs.size(), 50u) << help.output;
+    for (const auto &p : pairs) {
+        // Only the option check runs: every command needs more than this one option, so each
+        // stops at its own usage error (or a missing value) without doing anything.
+        CommandResult r = run_shell("timeout 20 " + std::string(MOCAP_MOCAPCTL) + " " + p.first +
+                                    " " + p.second + " </dev/null");
+        EXPECT_EQ(r.output.find("has no option"), std::string::npos) << p.first << " " << p.second
+                                                                      << "\n" << r.output;
+    }
 }
 
 // A command blocked in I/O (here: opening a named pipe nobody reads) cannot act on the first

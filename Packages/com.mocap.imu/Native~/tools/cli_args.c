@@ -81,6 +81,38 @@ unsigned long long cli_u64(int argc, char **argv, const char *name, unsigned lon
     return v;
 }
 
+/* Where `name` (its first `length` bytes) is in `known`: 0 absent, 1 a flag, 2 takes a value. */
+static int option_kind(const char *known, const char *name, size_t length)
+{
+    const char *p = known;
+    while (*p) {
+        while (*p == ' ') ++p;
+        const char *end = p;
+        while (*end && *end != ' ' && *end != '=') ++end;
+        if ((size_t)(end - p) == length && length > 0 && strncmp(p, name, length) == 0)
+            return *end == '=' ? 2 : 1;
+        p = end;
+        while (*p && *p != ' ') ++p;
+    }
+    return 0;
+}
+
+void cli_refuse_unknown(const char *command, int argc, char **argv, const char *known)
+{
+    for (int i = 0; i < argc; ++i) {
+        const char *arg = argv[i];
+        if (strncmp(arg, "--", 2) != 0) continue;
+        const int kind = option_kind(known, arg, strlen(arg));
+        if (kind == 2 && i + 1 < argc && strncmp(argv[i + 1], "--", 2) != 0) ++i; /* its value */
+        if (kind != 0) continue;
+        const char *equals = strchr(arg, '=');
+        if (equals && option_kind(known, arg, (size_t)(equals - arg)) == 2)
+            usage_exit("%s: write '%.*s %s': a value follows its option after a space", command,
+                       (int)(equals - arg), arg, equals + 1);
+        usage_exit("%s has no option %s ('mocapctl --help' lists them)", command, arg);
+    }
+}
+
 /* Both paths name one existing file (the same device and inode: links and other spellings
  * included). Windows has no inode numbers in stat: there, only identical text counts. */
 static int same_file(const char *a, const char *b)

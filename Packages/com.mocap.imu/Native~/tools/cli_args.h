@@ -18,6 +18,12 @@ long long cli_integer(int argc, char **argv, const char *name, long long fallbac
 /* An unsigned 64-bit whole number (seeds). */
 unsigned long long cli_u64(int argc, char **argv, const char *name, unsigned long long fallback);
 
+/* Usage error for an argument that looks like an option (`--name`) but is not one of the
+ * command's: `known` is a space-separated list in which "--name=" takes a value and "--name" is
+ * a flag. A mistyped option would otherwise be ignored and the command would run with the
+ * default it was meant to change. `command` names the command in the message. */
+void cli_refuse_unknown(const char *command, int argc, char **argv, const char *known);
+
 /* Usage error when an output option names the file `input` (an existing file read by the
  * command: a capture, a truth file), or two outputs name one file: opening the output for
  * writing would empty the input before it is read. `outputs` ends with NULL. */

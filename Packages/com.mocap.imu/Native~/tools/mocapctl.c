@@ -1778,13 +1778,56 @@ done:
 
 /* ---------------------------------------------------------------------------------------- */
 
+/* The options each command takes, as the usage text lists them ("--name=" takes a value):
+ * anything else that starts with "--" is refused before the command runs. */
+static const struct {
+    const char *command;
+    const char *options;
+} command_options[] = {
+    {"synth", "--out= --truth= --motion= --seconds= --world= --noise= --seed= --corrupt= "
+              "--dropout= --trajectory="},
+    {"replay", "--truth= --calibration= --prelude= --save-calibration= --csv= --realtime --rate= "
+               "--model= --out= --bvh-order= --json= --pose-csv= --smoothing="},
+    {"live", "--port= --baud= --record= --seconds= --model= --pose --smoothing="},
+    {"record", "--port= --out= --baud= --seconds="},
+    {"stream", "--vmc= --replay= --realtime --speed= --prelude= --port= --baud= --model= --rate= "
+               "--seconds= --allow-remote --smoothing="},
+    {"bench decode", "--seconds="},
+    {"bench", "--model= --seconds= --latency-seconds= --tip-seconds= --threads= "
+              "--max-characters= --tip-model="},
+    {"infer", "--model= --input= --output= --frames= --stream --batch= --threads= --opt= "
+              "--provider= --repeat= --ort="},
+    {"model-info", "--ort="},
+    {"version", ""},
+};
+
+static int asks_for_help(int argc, char **argv)
+{
+    for (int i = 0; i < argc; ++i)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) return 1;
+    return 0;
+}
+
+/* Refuses an option `command` does not take (usage error, exit 2). */
+static void check_options(const char *command, int argc, char **argv)
+{
+    for (size_t i = 0; i < sizeof command_options / sizeof command_options[0]; ++i)
+        if (strcmp(command_options[i].command, command) == 0) {
+            cli_refuse_unknown(command, argc, argv, command_options[i].options);
+            return;
+        }
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) return usage();
     signal(SIGINT, on_interrupt);
     const char *cmd = argv[1];
-    if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0)
-        return print_usage(stdout, 0);
+    if (strcmp(cmd, "help") == 0 || asks_for_help(argc - 1, argv + 1)) return print_usage(stdout, 0);
+    if (strcmp(cmd, "bench") == 0 && argc >= 3)
+        check_options(strcmp(argv[2], "decode") == 0 ? "bench decode" : "bench", argc - 3, argv + 3);
+    else
+        check_options(cmd, argc - 2, argv + 2);
     if (strcmp(cmd, "synth") == 0) return cmd_synth(argc - 2, argv + 2);
     if (strcmp(cmd, "replay") == 0) return cmd_replay(argc - 2, argv + 2);
     if (strcmp(cmd, "live") == 0) return cmd_live(argc - 2, argv + 2);
