@@ -192,3 +192,36 @@ TEST_F(MocapctlPose, SmoothingOptionLowersJitterAndRejectsBadValues)
         EXPECT_NE(r.output.find("--smoothing wants"), std::string::npos) << r.output;
     }
 }
+
+// A realtime stream paced faster than inference loses frames on the way; the engine counts them,
+// and `stream` now says so (before, 1,800 recorded frames became ~1,100 poses without a word).
+// An as-fast-as-possible replay waits for the solver instead and loses nothing.
+TEST(MocapctlStream, FramesLostToATooHighSpeedAreReported)
+{
+    REQUIRE_ORT();
+    const std::string dir = test_temp_dir();
+    const std::string capture = dir + "/mixed.cap";
+    ASSERT_EQ(mocapctl("synth --out " + capture).exit_code, 0); // 8 s prelude + 22 s of motion
+    const std::string common = "stream --vmc 127.0.0.1:39541 --replay " + capture + " --model " +
+                               kShippedModel.string();
+    const std::regex sent("(\\d+) poses, (\\d+) bundles sent");
+    std::smatch m;
+
+    Result fast = mocapctl(common);
+    ASSERT_EQ(fast.exit_code, 0) << fast.output;
+    EXPECT_EQ(fast.output.find("fell behind"), std::string::npos) << fast.output;
+    ASSERT_TRUE(std::regex_search(fast.output, m, sent)) << fast.output;
+    const long all_poses = std::stol(m[1]);
+    EXPECT_GT(all_poses, 1000);
+
+    // 30 s of capture in 30 ms: no CPU solves 1,300 frames in that time.
+    Result hurried = mocapctl(common + " --speed 1000");
+    ASSERT_EQ(hurried.exit_code, 0) << hurried.output;
+    ASSERT_TRUE(std::regex_search(hurried.output, m, sent)) << hurried.output;
+    EXPECT_LT(std::stol(m[1]), all_poses);
+    const std::regex lost("processing fell behind and lost (\\d+) frame\\(s\\), (\\d+) pose\\(s\\) "
+                          "and (\\d+) input byte\\(s\\)");
+    ASSERT_TRUE(std::regex_search(hurried.output, m, lost)) << hurried.output;
+    EXPECT_GT(std::stol(m[1]) + std::stol(m[2]) + std::stol(m[3]), 0);
+    EXPECT_NE(hurried.output.find("a lower --speed"), std::string::npos) << hurried.output;
+}

@@ -468,6 +468,27 @@ static int replay_ended_early(mocap_session *session)
     return 1;
 }
 
+/* A realtime replay paced faster than processing (a high --speed on a slow machine), or a live
+ * session whose consumer stalled, loses data on the way: the engine counts it (input bytes,
+ * frames, poses) but says nothing. Say so after the run; `solver` may be NULL. */
+static void report_dropped(mocap_session *session, mocap_solver *solver, int32_t character,
+                           const char *what, const char *remedy)
+{
+    mocap_session_stats ss;
+    mocap_solver_stats ps;
+    unsigned long long bytes = 0, frames = 0, poses = 0;
+    if (mocap_session_get_stats(session, &ss) == MOCAP_OK) {
+        bytes = (unsigned long long)ss.bytes_dropped;
+        frames = (unsigned long long)ss.frames_dropped;
+    }
+    if (solver && mocap_solver_get_stats(solver, character, &ps) == MOCAP_OK)
+        poses = (unsigned long long)ps.poses_dropped;
+    if (bytes == 0 && frames == 0 && poses == 0) return;
+    fprintf(stderr, "mocapctl: warning: %s: processing fell behind and lost %llu frame(s), %llu "
+                    "pose(s) and %llu input byte(s) on the way; %s\n",
+            what, frames, poses, bytes, remedy);
+}
+
 /* The replay skips damaged chunks and a cut-off end without a word (the reader resynchronises,
  * as it must for a crash-damaged file); say so after the run, so that output made from part of
  * a capture is not taken for the whole. Reads the capture's chunk structure once more (fast). */
@@ -659,6 +680,8 @@ static int cmd_replay(int argc, char **argv)
                "mean %.3f deg\n", worst_mean);
     rc = replay_ended_early(st->session);
     report_capture_damage(capture);
+    report_dropped(st->session, NULL, 0, "the replay",
+                   "a replay without --realtime waits instead of dropping");
     if (close_output(&st->csv, csv_path)) rc = 1;
 done:
     if (st->session) mocap_session_close(st->session);
@@ -1300,6 +1323,8 @@ static int cmd_replay_pose(int argc, char **argv)
                               cal_failed ? "refused" : "missing");
     if (replay_ended_early(session)) rc = 1;
     report_capture_damage(capture);
+    report_dropped(session, solver, character, "the replay",
+                   "a replay without --realtime waits instead of dropping");
     if (report_inference_failures(solver)) rc = 1;
 done:
     /* Solver first (it consumes the session), then the session, then the model. */
@@ -1764,6 +1789,14 @@ static int cmd_stream(int argc, char **argv)
     for (int i = 0; !port && i < nrep; ++i) {
         if (replay_ended_early(sessions[i])) rc = 1;
         report_capture_damage(replays[i]);
+    }
+    for (int i = 0; i < characters; ++i) {
+        char what[32];
+        snprintf(what, sizeof what, "character %d", i);
+        report_dropped(sessions[i], solver, ids[i], what,
+                       port ? "the machine could not keep up with the sensors"
+                            : "a lower --speed (or none: an as-fast-as-possible replay waits "
+                              "instead of dropping) streams every pose");
     }
 done:
     if (solver) mocap_solver_close(solver);
