@@ -212,9 +212,11 @@ MOCAP_API mocap_status mocap_session_stop(mocap_session *session);
  * the handle is invalid. One thread, and no other call on this session may be in progress. */
 MOCAP_API void mocap_session_close(mocap_session *session);
 
-/* Copy the newest frame into *out (a live session keeps the 1024 frames nobody took: after a
- * pause longer than that, the first poll returns the newest of those, and its time_s says how
- * old it is). MOCAP_ERR_NO_DATA when no frame is newer than the one the previous poll returned; MOCAP_ERR_END_OF_STREAM once a replay is finished and drained. A replay
+/* Copy the newest frame into *out, also after a pause of the consumer longer than the 1024
+ * frames a live session keeps for drain (frames beyond those are dropped and counted, but the
+ * newest is always kept for poll). A frame is handed out once: MOCAP_ERR_NO_DATA when no frame
+ * is newer than the newest one poll or drain returned before, and drain skips frames older
+ * than that. MOCAP_ERR_END_OF_STREAM once a replay is finished and drained. A replay
  * whose file stops reading (a removed drive) finishes there: END_OF_STREAM after the frames read
  * before the failure, and the stats' last_error names the file and the cause.
  * Consumer thread: one thread at a time polls/drains a session. */
@@ -447,8 +449,10 @@ MOCAP_API mocap_status mocap_solver_start(mocap_solver *solver);
 /* Stops the thread and frees the solver (not the sessions or the model). NULL accepted. Close the
  * solver before its sessions: the thread reads them until it stops. */
 MOCAP_API void mocap_solver_close(mocap_solver *solver);
-/* Newest pose of a character; MOCAP_ERR_NO_DATA when nothing new; MOCAP_ERR_END_OF_STREAM when
- * the character's replay is finished and all its poses were taken. One consumer thread. */
+/* Newest pose of a character, also after a pause of the consumer longer than the 1024 poses
+ * kept for drain; MOCAP_ERR_NO_DATA when nothing is newer than what poll or drain returned
+ * before (drain likewise skips poses older than that); MOCAP_ERR_END_OF_STREAM when the
+ * character's replay is finished and all its poses were taken. One consumer thread. */
 MOCAP_API mocap_status mocap_solver_poll_latest(mocap_solver *solver, int32_t character,
                                                 mocap_pose *out);
 MOCAP_API mocap_status mocap_solver_drain(mocap_solver *solver, int32_t character,

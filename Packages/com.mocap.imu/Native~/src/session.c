@@ -38,6 +38,9 @@ struct mocap_session {
     pipeline *pipe;
     spsc_ring bytes;
     spsc_ring frames;
+    /* Every frame is also published here: the newest one, for poll_latest, even while the
+     * ring is full after a long pause of the consumer (the ring keeps the oldest). */
+    triple_buffer newest_frame;
     mocap_thread *reader;
     mocap_thread *processor;
     int started;                /* under lock: start() was called (threads exist or starting) */
@@ -68,7 +71,8 @@ struct mocap_session {
     char async_error[256];
     char capture_error_text[200]; /* why the recording failed (async_error may move on) */
 
-    /* Consumer side only. */
+    /* Consumer side only. latest is the newest frame handed out by poll or drain: frames with
+     * its sequence or an older one are not handed out again. */
     int have_latest;
     mocap_frame latest;
 };
@@ -208,6 +212,8 @@ static void reader_main(void *arg)
 static void deliver_frame(void *user, const mocap_frame *frame)
 {
     mocap_session *s = (mocap_session *)user;
+    *(mocap_frame *)triple_buffer_write_slot(&s->newest_frame) = *frame;
+    triple_buffer_publish(&s->newest_frame);
     for (;;) {
         mocap_frame *slot = (mocap_frame *)spsc_ring_reserve(&s->frames);
         if (slot) {
@@ -369,6 +375,7 @@ static void session_free(mocap_session *s)
     if (s->source) transport_close(s->source);
     spsc_ring_destroy(&s->bytes);
     spsc_ring_destroy(&s->frames);
+    triple_buffer_destroy(&s->newest_frame);
     if (s->lock) mocap_mutex_destroy(s->lock);
     free(s->pipe);
     free(s);
@@ -389,7 +396,8 @@ mocap_status mocap_session_open(const mocap_session_config *config, mocap_sessio
     s->pipe = (pipeline *)calloc(1, sizeof *s->pipe);
     if (!s->pipe || mocap_mutex_create(&s->lock) != 0 ||
         spsc_ring_init(&s->bytes, sizeof(byte_chunk), BYTE_RING_CHUNKS) != 0 ||
-        spsc_ring_init(&s->frames, sizeof(mocap_frame), FRAME_RING_FRAMES) != 0) {
+        spsc_ring_init(&s->frames, sizeof(mocap_frame), FRAME_RING_FRAMES) != 0 ||
+        triple_buffer_init(&s->newest_frame, sizeof(mocap_frame)) != 0) {
         session_free(s);
         return mocap_fail(MOCAP_ERR_NO_MEMORY, "out of memory allocating session buffers");
     }
@@ -524,18 +532,34 @@ static mocap_status end_or_no_data(mocap_session *s)
     return MOCAP_ERR_NO_DATA;
 }
 
+/* A frame the consumer has not been handed yet (poll and drain may both have run). */
+static int frame_is_new(const mocap_session *s, const mocap_frame *f)
+{
+    return !s->have_latest || f->sequence > s->latest.sequence;
+}
+
 mocap_status mocap_session_poll_latest(mocap_session *s, mocap_frame *out)
 {
     if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or out is NULL");
     int got = 0;
     const mocap_frame *f;
     while ((f = (const mocap_frame *)spsc_ring_peek(&s->frames)) != NULL) {
-        s->latest = *f;
+        if (frame_is_new(s, f)) {
+            s->latest = *f;
+            s->have_latest = 1;
+            got = 1;
+        }
         spsc_ring_release(&s->frames);
+    }
+    /* After a long pause the ring holds the oldest frames and newer ones were dropped; the
+     * newest is here. Taken after the ring, so it is at least as new as what the ring held. */
+    const mocap_frame *newest = (const mocap_frame *)triple_buffer_take(&s->newest_frame);
+    if (newest && frame_is_new(s, newest)) {
+        s->latest = *newest;
+        s->have_latest = 1;
         got = 1;
     }
     if (!got) return end_or_no_data(s);
-    s->have_latest = 1;
     *out = s->latest;
     return MOCAP_OK;
 }
@@ -546,11 +570,14 @@ mocap_status mocap_session_drain(mocap_session *s, mocap_frame *out, uint32_t ca
     if (!s || !out || !count)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session, out or count is NULL");
     uint32_t n = 0;
-    while (n < capacity && spsc_ring_pop(&s->frames, &out[n]) == 0) ++n;
+    while (n < capacity && spsc_ring_pop(&s->frames, &out[n]) == 0) {
+        if (!frame_is_new(s, &out[n])) continue; /* a poll already handed it out */
+        s->latest = out[n];
+        s->have_latest = 1;
+        ++n;
+    }
     *count = n;
     if (n == 0) return end_or_no_data(s);
-    s->latest = out[n - 1];
-    s->have_latest = 1;
     return MOCAP_OK;
 }
 

@@ -46,7 +46,13 @@ typedef struct character {
     mocap_atomic_u64 frames_solved, frames_uncalibrated, frames_nonfinite, outputs_nonfinite,
         poses_dropped, run_failures;
 
-    /* Consumer only. */
+    /* Every pose is also published here: the newest one, for poll_latest, even while the ring
+     * is full after a long pause of the consumer (the ring keeps the oldest). */
+    triple_buffer newest_pose;
+
+    /* Consumer only: the newest pose handed out by poll or drain (have_latest: one was);
+     * poses with its sequence or an older one are not handed out again. */
+    int have_latest;
     mocap_pose latest;
 } character;
 
@@ -130,6 +136,8 @@ static int64_t pose_stamp(const character *ch, const mocap_frame *f, int64_t tak
 
 static void push_pose(character *ch, const mocap_pose *pose)
 {
+    *(mocap_pose *)triple_buffer_write_slot(&ch->newest_pose) = *pose;
+    triple_buffer_publish(&ch->newest_pose);
     mocap_pose *slot = (mocap_pose *)spsc_ring_reserve(&ch->poses);
     if (!slot) {
         mocap_atomic_add_u64(&ch->poses_dropped, 1);
@@ -517,10 +525,12 @@ mocap_status mocap_solver_add_character(mocap_solver *s, mocap_session *session,
         ch->state_h = (float *)calloc(2 * n, sizeof(float));
         if (ch->state_h) ch->state_c = ch->state_h + n;
     }
-    if (!ch || !ch->state_h || spsc_ring_init(&ch->poses, sizeof(mocap_pose), POSE_RING_POSES) != 0) {
+    if (!ch || !ch->state_h || spsc_ring_init(&ch->poses, sizeof(mocap_pose), POSE_RING_POSES) != 0 ||
+        triple_buffer_init(&ch->newest_pose, sizeof(mocap_pose)) != 0) {
         if (ch) {
             free(ch->state_h);
             spsc_ring_destroy(&ch->poses);
+            triple_buffer_destroy(&ch->newest_pose);
         }
         free(ch);
         return mocap_fail(MOCAP_ERR_NO_MEMORY, "out of memory adding a character");
@@ -573,6 +583,7 @@ void mocap_solver_close(mocap_solver *s)
     for (int b = 0; b < MOCAP_MAX_CHARACTERS; ++b) ort_stream_destroy(s->streams[b]);
     for (int c = 0; c < s->count; ++c) {
         spsc_ring_destroy(&s->chars[c]->poses);
+        triple_buffer_destroy(&s->chars[c]->newest_pose);
         free(s->chars[c]->state_h);
         free(s->chars[c]);
     }
@@ -589,6 +600,18 @@ static mocap_status check_character(mocap_solver *s, int32_t c)
     return MOCAP_OK;
 }
 
+/* A pose the consumer has not been handed yet (poll and drain may both have run). */
+static int pose_is_new(const character *ch, const mocap_pose *p)
+{
+    return !ch->have_latest || p->sequence > ch->latest.sequence;
+}
+
+static void hand_out(character *ch, const mocap_pose *p)
+{
+    ch->latest = *p;
+    ch->have_latest = 1;
+}
+
 mocap_status mocap_solver_poll_latest(mocap_solver *s, int32_t c, mocap_pose *out)
 {
     mocap_status st = check_character(s, c);
@@ -597,7 +620,21 @@ mocap_status mocap_solver_poll_latest(mocap_solver *s, int32_t c, mocap_pose *ou
     character *ch = s->chars[c];
     int ended = mocap_atomic_load_int(&ch->ended); /* before popping: see mocap_solver_drain */
     int got = 0;
-    while (spsc_ring_pop(&ch->poses, &ch->latest) == 0) got = 1;
+    const mocap_pose *p;
+    while ((p = (const mocap_pose *)spsc_ring_peek(&ch->poses)) != NULL) {
+        if (pose_is_new(ch, p)) {
+            hand_out(ch, p);
+            got = 1;
+        }
+        spsc_ring_release(&ch->poses);
+    }
+    /* After a long pause the ring holds the oldest poses and newer ones were dropped; the
+     * newest is here. Taken after the ring, so it is at least as new as what the ring held. */
+    const mocap_pose *newest = (const mocap_pose *)triple_buffer_take(&ch->newest_pose);
+    if (newest && pose_is_new(ch, newest)) {
+        hand_out(ch, newest);
+        got = 1;
+    }
     if (got) {
         *out = ch->latest;
         return MOCAP_OK;
@@ -617,12 +654,13 @@ mocap_status mocap_solver_drain(mocap_solver *s, int32_t c, mocap_pose *out, uin
      * popped" really means nothing is left. */
     int ended = mocap_atomic_load_int(&ch->ended);
     uint32_t n = 0;
-    while (n < capacity && spsc_ring_pop(&ch->poses, &out[n]) == 0) ++n;
-    *count = n;
-    if (n > 0) {
-        ch->latest = out[n - 1];
-        return MOCAP_OK;
+    while (n < capacity && spsc_ring_pop(&ch->poses, &out[n]) == 0) {
+        if (!pose_is_new(ch, &out[n])) continue; /* a poll already handed it out */
+        hand_out(ch, &out[n]);
+        ++n;
     }
+    *count = n;
+    if (n > 0) return MOCAP_OK;
     if (ended && capacity > 0)
         return mocap_fail(MOCAP_ERR_END_OF_STREAM, "character %d: replay finished", (int)c);
     return MOCAP_ERR_NO_DATA;

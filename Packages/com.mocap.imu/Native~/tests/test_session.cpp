@@ -932,3 +932,39 @@ TEST(Session, CalibrationRequestsRacingStartAreAllApplied)
         EXPECT_EQ(mocap_session_start(session.s), MOCAP_ERR_STATE);
     }
 }
+
+// A consumer that stops polling for longer than the frame ring holds (an editor paused on a
+// breakpoint) gets the newest frame from its next poll, not the newest of the 1024 the ring
+// kept (before, that frame was 17 s old at 60 Hz). What poll handed out is not handed out again,
+// neither by the next poll nor by a drain.
+TEST(Session, PollAfterALongPauseReturnsTheNewestFrame)
+{
+    std::string capture = test_temp_path("long_pause.cap");
+    ASSERT_TRUE(write_short_walk(capture, 41, 40.0));
+    mocap_session_config config = replay_config(capture);
+    config.output_rate_hz = 400.0f; // several thousand frames from the walk
+    config.replay_realtime = 1;
+    config.replay_speed = 10.0f;  // live-like: a full ring drops frames instead of waiting
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+    mocap_session_stats stats{};
+    const auto t0 = Clock::now();
+    do {  // the pause: nobody polls until the replay has ended
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
+    } while (stats.connection_state != MOCAP_CONNECTION_ENDED && seconds_since(t0) < 30);
+    std::this_thread::sleep_for(std::chrono::milliseconds(200)); // the last frames through
+    ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
+    ASSERT_GT(stats.frames_dropped, 0u) << "the ring never filled: the test shows nothing";
+
+    mocap_frame frame{};
+    ASSERT_EQ(mocap_session_poll_latest(session.s, &frame), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(frame.sequence + 1, stats.frames_emitted) << "not the newest frame";
+    EXPECT_GT(frame.sequence, 1024u);
+    EXPECT_EQ(mocap_session_poll_latest(session.s, &frame), MOCAP_ERR_END_OF_STREAM);
+    mocap_frame rest[8];
+    uint32_t n = 99;
+    EXPECT_EQ(mocap_session_drain(session.s, rest, 8, &n), MOCAP_ERR_END_OF_STREAM);
+    EXPECT_EQ(n, 0u);
+}

@@ -834,3 +834,60 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
     }
     EXPECT_EQ(mocap_api_version(), 4);
 }
+
+// A consumer that stops polling for longer than the pose ring holds gets the newest pose from
+// its next poll, not the newest of the 1024 the ring kept; it is not handed out again.
+TEST_F(SolverOnShippedModel, PollAfterALongPauseReturnsTheNewestPose)
+{
+    std::string cap = test_temp_path("long_pause.cap");
+    synth_config cfg = short_capture(43, 60.0, "mixed", cap);  // ~1,350 poses (22 s of motion)
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg, 1));
+    ASSERT_NE(sessions.list[0], nullptr);
+    // Realtime at 10x: live-like (full rings drop instead of waiting), about 3 s of wall time.
+    mocap_session_close(sessions.list[0]);
+    mocap_session_config c;
+    mocap_config_defaults(&c);
+    c.source_kind = MOCAP_SOURCE_REPLAY;
+    c.replay_realtime = 1;
+    c.replay_speed = 10.0f;
+    snprintf(c.path, sizeof c.path, "%s", cap.c_str());
+    ASSERT_EQ(mocap_session_open(&c, &sessions.list[0]), MOCAP_OK) << mocap_last_error();
+    const double t0 = synth_session_time(&cfg, 0.0);
+    ASSERT_EQ(mocap_calibration_schedule(sessions.list[0], MOCAP_CALIBRATION_HEADING, t0 + 0.5,
+                                         (float)(cfg.heading_s - 1.0)), MOCAP_OK);
+    ASSERT_EQ(mocap_calibration_schedule(sessions.list[0], MOCAP_CALIBRATION_TPOSE,
+                                         t0 + cfg.heading_s + cfg.strap_s + 0.5,
+                                         (float)(cfg.tpose_s - 1.0)), MOCAP_OK);
+    Solver solver;
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
+    ASSERT_EQ(mocap_session_start(sessions.list[0]), MOCAP_OK);
+
+    // The pause: nobody polls until the replay ended and the solver has nothing left to do.
+    mocap_session_stats ss{};
+    mocap_solver_stats st{};
+    uint64_t last_done = ~0ull;
+    const auto start = Clock::now();
+    for (;;) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        ASSERT_EQ(mocap_session_get_stats(sessions.list[0], &ss), MOCAP_OK);
+        ASSERT_EQ(mocap_solver_get_stats(solver.s, 0, &st), MOCAP_OK);
+        const uint64_t done = st.frames_solved + st.frames_uncalibrated;
+        if (ss.connection_state == MOCAP_CONNECTION_ENDED && done == last_done) break;
+        last_done = done;
+        ASSERT_LT(seconds_since(start), 120.0);
+    }
+    ASSERT_GT(st.poses_dropped, 0u) << "the ring never filled: the test shows nothing";
+
+    mocap_pose pose{};
+    ASSERT_EQ(mocap_solver_poll_latest(solver.s, 0, &pose), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(pose.sequence + 1, st.frames_solved) << "not the newest pose";
+    EXPECT_GT(pose.sequence, 1024u);
+    EXPECT_EQ(mocap_solver_poll_latest(solver.s, 0, &pose), MOCAP_ERR_END_OF_STREAM);
+    uint32_t n = 99;
+    EXPECT_EQ(mocap_solver_drain(solver.s, 0, &pose, 1, &n), MOCAP_ERR_END_OF_STREAM);
+    EXPECT_EQ(n, 0u);
+}
