@@ -34,6 +34,8 @@ typedef int (*synth_motion_fn)(void *user, double t, synth_pose *out);
  * velocity and analytic accelerations). name: "walk", "arms", "squat", "turn", "mixed"
  * (all four in sequence, the default). Returns NULL for an unknown name. */
 synth_motion_fn synth_builtin_motion(const char *name);
+/* How long a motion lasts, s (to 1 ms; at most `limit`): the first time it reports its end. */
+double synth_motion_duration(synth_motion_fn motion, void *user, double limit);
 /* Motion from a trajectory file (see docs/synth-trajectory.md): text lines
  * "t qw qx qy qz ax ay az" x 6 segments, in the model frame. Loaded into memory once. */
 typedef struct synth_trajectory synth_trajectory;

@@ -621,6 +621,21 @@ mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
     return MOCAP_OK;
 }
 
+double synth_motion_duration(synth_motion_fn motion, void *user, double limit)
+{
+    synth_pose pose;
+    if (!motion || motion(user, 0.0, &pose) != 0) return 0.0;
+    if (motion(user, limit, &pose) == 0) return limit;
+    /* Motions run from 0 to their end without holes: bisect on "still running". */
+    double lo = 0.0, hi = limit;
+    while (hi - lo > 1e-3) {
+        const double mid = 0.5 * (lo + hi);
+        if (motion(user, mid, &pose) == 0) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
 void synth_trajectory_free(synth_trajectory *traj) { free(traj); }
 
 double synth_trajectory_duration(const synth_trajectory *traj)

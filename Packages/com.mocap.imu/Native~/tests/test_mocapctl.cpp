@@ -362,3 +362,31 @@ TEST(Mocapctl, LiveOnAWrongPortNamesIt)
     EXPECT_NE(r.exit_code, 0);
     EXPECT_NE(r.output.find("/dev/ttyNOPE0"), std::string::npos) << r.output;
 }
+
+// `synth --seconds` longer than the motion gave a shorter capture without a word; the summary
+// now says how long the motion part is, and a note says when --seconds was cut.
+TEST(Mocapctl, SynthSaysHowLongTheMotionIsAndWhenSecondsWasCut)
+{
+    std::string dir = test_temp_dir();
+    CommandResult walk = run_command("synth --out " + dir + "/w.cap --motion walk --seconds 4");
+    ASSERT_EQ(walk.exit_code, 0) << walk.output;
+    EXPECT_NE(walk.output.find("then 4.0 s of walk"), std::string::npos) << walk.output;
+    EXPECT_EQ(walk.output.find("note:"), std::string::npos) << walk.output;
+
+    CommandResult whole = run_command("synth --out " + dir + "/m.cap");
+    ASSERT_EQ(whole.exit_code, 0) << whole.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(whole.output, m, std::regex("then ([0-9.]+) s of mixed")))
+        << whole.output;
+    const double length = std::stod(m[1]);
+    EXPECT_GT(length, 10.0);
+    EXPECT_EQ(whole.output.find("note:"), std::string::npos) << whole.output;
+
+    CommandResult longer = run_command("synth --out " + dir + "/l.cap --seconds 1000");
+    ASSERT_EQ(longer.exit_code, 0) << longer.output;
+    EXPECT_NE(longer.output.find("the motion ends after " + std::string(m[1]) +
+                                 " s, so the capture is shorter than --seconds 1000"),
+              std::string::npos) << longer.output;
+    // The capture itself is the whole motion either way (the header's creation time differs).
+    EXPECT_EQ(read_file_bytes(dir + "/l.cap").size(), read_file_bytes(dir + "/m.cap").size());
+}

@@ -245,14 +245,22 @@ static int cmd_synth(int argc, char **argv)
             return 2;
         }
     }
+    /* A motion ends where it ends: --seconds can shorten it, not lengthen it. */
+    const double motion_length = synth_motion_duration(motion, motion_user, 86400.0);
+    const int clipped = arg_value(argc, argv, "--seconds") && cfg.motion_s > motion_length + 1e-3;
     mocap_status st = synth_write_capture(&cfg, motion, motion_user, out, truth);
     synth_trajectory_free(traj);
     if (st != MOCAP_OK) return fail(st, "writing capture");
-    printf("wrote %s: %.1f s prelude (heading %.1f s, strap %.1f s, T-pose %.1f s) then the motion, "
-           "%s world, seed %llu%s%s\n",
+    printf("wrote %s: %.1f s prelude (heading %.1f s, strap %.1f s, T-pose %.1f s) then %.1f s of "
+           "%s, %s world, seed %llu%s%s\n",
            out, cfg.heading_s + cfg.strap_s + cfg.tpose_s, cfg.heading_s, cfg.strap_s, cfg.tpose_s,
+           cfg.motion_s < motion_length ? cfg.motion_s : motion_length,
+           traj_path ? "the trajectory" : motion_name ? motion_name : "mixed",
            cfg.world_frame == MOCAP_WORLD_ENU ? "ENU" : "NWU",
            (unsigned long long)cfg.seed, truth ? ", truth " : "", truth ? truth : "");
+    if (clipped)
+        fprintf(stderr, "mocapctl: note: the motion ends after %.1f s, so the capture is shorter "
+                        "than --seconds %s\n", motion_length, arg_value(argc, argv, "--seconds"));
     return 0;
 }
 
