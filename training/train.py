@@ -23,9 +23,12 @@ predicted rotations on the sample's own skeleton), root velocity (MSE, m/s), roo
 
 Schedule: Adam, warm-up then cosine decay over a step count fixed at the start (measured speed
 x budget, or --steps) so resumed runs continue the same schedule. --resume needs last.pt and
-continues with the options saved in it (resume_config: only budget, steps, device and the output
-folders may change; a contradicting option is refused, the network is never switched over
-again). Seeded; fp32 on CPU and CUDA (TF32 disabled). Checkpoints in training/data/checkpoints
+continues with the options saved in it (resume_config: only budget, steps, --stop-after, device
+and the output folders may change; a contradicting option is refused, the network is never
+switched over again). A checkpoint holds the random generators, the streams' clips and positions
+and the LSTM state they carry, so a run stopped with --stop-after N and resumed takes the same
+steps as one that never stopped (on the same device, with a budget that does not cut the
+schedule short). Seeded; fp32 on CPU and CUDA (TF32 disabled). Checkpoints in training/data/checkpoints
 (last.pt, best.pt by validation loss), log training/results/train_log.json, curves
 training/results/loss.png.
 """
@@ -59,6 +62,7 @@ SIZES = {"tiny": ModelConfig(32, 32, 1, 32), "small": ModelConfig(256, 256, 2, 2
 class TrainConfig:
     budget_minutes: float = 60.0
     steps: int | None = None          # total optimiser steps (None: from measured speed x budget)
+    stop_after: int | None = None     # stop (checkpointed) after this step; --resume goes on
     batch: int = 32
     window: int = 120                 # frames per step per stream (2 s)
     lr: float = 1e-3
@@ -140,6 +144,16 @@ class StreamBatcher:
         self.wrist = wrist
         self.samples = [None] * batch
         self.pos = [0] * batch
+
+    def state_dict(self) -> dict:
+        """What the streams are playing and where: with the numpy generator's state, enough for a
+        resumed run to draw exactly the batches the uninterrupted run would have drawn."""
+        return {"samples": list(self.samples), "pos": list(self.pos)}
+
+    def load_state_dict(self, state: dict) -> None:
+        if len(state["samples"]) != self.batch:
+            raise UsageError(f"the checkpoint's batcher has {len(state['samples'])} streams, not {self.batch}")
+        self.samples, self.pos = list(state["samples"]), [int(p) for p in state["pos"]]
 
     def _new(self, i: int) -> None:
         while True:   # a sped-up short clip can end up shorter than a window: draw again
@@ -382,11 +396,14 @@ def checkpoint_network(ck, path, device="cpu") -> PoseNet:
     return net
 
 
-def _save(path: Path, net, opt, step, total, cfg, history, best, rng) -> None:
+def _save(path: Path, net, opt, step, total, cfg, history, best, rng, batcher, state) -> None:
+    # The batcher's streams and the LSTM state they carry make a resumed run continue exactly
+    # where this one stands (same batches, same recurrent state), not from fresh clips.
     atomic_torch_save({"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
                        "total_steps": total, "config": net.config.to_dict(), "train_config": asdict(cfg),
                        "history": history, "best": best, "numpy_rng": rng.bit_generator.state,
-                       "torch_rng": torch.get_rng_state()}, path)
+                       "torch_rng": torch.get_rng_state(), "batcher": batcher.state_dict(),
+                       "lstm_state": [t.detach().cpu() for t in state]}, path)
 
 
 def plot_losses(history: dict, path: Path) -> None:
@@ -473,6 +490,9 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
           f"({steps_per_epoch} steps/epoch), {len(val)} val clips, device {device}, blas {blas}, "
           f"{count_parameters(net)} parameters")
     state = net.zero_state(cfg.batch, device)
+    if ck is not None and "batcher" in ck:   # older checkpoints: the streams start afresh
+        batcher.load_state_dict(ck["batcher"])
+        state = tuple(t.to(device) for t in ck["lstm_state"])
     t_start = time.time()
     budget_s = cfg.budget_minutes * 60.0
     last_eval = last_ckpt = time.time()
@@ -485,6 +505,9 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     net.train()
     while True:
         if total is not None and step >= total:
+            break
+        if cfg.stop_after is not None and step >= cfg.stop_after:
+            print(f"train: stopped after step {step} (--stop-after); --resume continues the run")
             break
         if time.time() - t_start > budget_s:
             print("train: budget reached")
@@ -527,7 +550,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             history["train"].append(rec)
             acc, acc_n, t_log = {}, 0, time.time()
         now = time.time()
-        done = (total is not None and step >= total) or now - t_start > budget_s
+        done = ((total is not None and step >= total) or now - t_start > budget_s
+                or (cfg.stop_after is not None and step >= cfg.stop_after))
         if val and (now - last_eval > cfg.eval_every_s or done):
             vr = validate(net, val, cfg, device)
             vr["step"] = step
@@ -538,15 +562,15 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             (pbar.write if pbar is not None else print)(msg)
             if best is None or vr["val_loss"] < best["val_loss"]:
                 best = dict(vr)
-                _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng)
+                _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
         if now - last_ckpt > cfg.ckpt_every_s:
-            _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng)
+            _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
             last_ckpt = time.time()
     if pbar is not None:
         pbar.close()
-    _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng)
+    _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
     if not val:
-        _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng)
+        _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
     st = np.array(step_times[5:] or step_times)
     summary = {"steps": step, "total_steps": total, "epochs": step / steps_per_epoch,
                "s_per_step_median": float(np.median(st)) if st.size else None,
@@ -566,8 +590,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
 # Options a resumed run may change when its command line gives them: how long it runs, on what,
 # and where it writes. Every other option comes from the checkpoint (its saved train_config; the
 # network's size, anchoring and wrist placement from its model config).
-RESUME_OVERRIDES = ("budget_minutes", "steps", "device", "ckpt_dir", "results_dir", "progress", "resume",
-                    "eval_every_s", "ckpt_every_s")
+RESUME_OVERRIDES = ("budget_minutes", "steps", "stop_after", "device", "ckpt_dir", "results_dir", "progress",
+                    "resume", "eval_every_s", "ckpt_every_s")
 ARCHITECTURE = ("size", "anchored", "wrist_sensor")
 _OPTIONS = {"w_pos": "--pos-weight", "arm_jitter_deg": "--arm-jitter", "anchored": "--no-anchor",
             "train_source": "--bvh", "val_source": "--val-bvh"}
@@ -609,7 +633,7 @@ def _contradiction(key: str, new, old, path) -> str:
         new, old = ("anchored" if new else "not anchored (--no-anchor)"), ("anchored" if old else "not anchored")
     what = "network" if key in ARCHITECTURE else "training options"
     return (f"--resume: {_option(key)} {new} contradicts {path} ({old}); a resumed run keeps its "
-            f"{what} (only --budget-minutes, --steps, --device, --ckpt-dir, --results-dir may "
+            f"{what} (only --budget-minutes, --steps, --stop-after, --device, --ckpt-dir, --results-dir may "
             f"change; start a new run with --init-from {path} to change the rest)")
 
 
@@ -636,7 +660,8 @@ def resume_config(cfg: TrainConfig, explicit) -> TrainConfig:
     if not last.is_file():
         raise UsageError(_nothing_to_resume(cfg.ckpt_dir))
     saved = saved_train_config(load_checkpoint_file(last))
-    out = replace(saved, resume=True, ckpt_dir=cfg.ckpt_dir, progress=cfg.progress)
+    # stop_after belongs to one sitting: the saved one would stop the resumed run at once.
+    out = replace(saved, resume=True, ckpt_dir=cfg.ckpt_dir, progress=cfg.progress, stop_after=None)
     for key in sorted(explicit):
         if key in RESUME_OVERRIDES:
             setattr(out, key, getattr(cfg, key))
@@ -651,7 +676,7 @@ def config_from_args(args) -> TrainConfig:
     may change."""
     cfg = TrainConfig()
     explicit = set()
-    for k in ("budget_minutes", "steps", "batch", "window", "lr", "seed", "device", "size",
+    for k in ("budget_minutes", "steps", "stop_after", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
               "arm_jitter_deg", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor"):
         v = getattr(args, k, None)
@@ -695,9 +720,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("--budget-minutes", dest="budget_minutes", type=float, default=None,
                         help="wall-clock budget (default 60)")
     parser.add_argument("--steps", type=int, default=None, help="total steps (default: from budget)")
+    parser.add_argument("--stop-after", dest="stop_after", type=int, default=None,
+                        help="stop after this step of the schedule, with a checkpoint; --resume "
+                             "continues exactly where it stopped (a run split over sittings)")
     parser.add_argument("--resume", action="store_true",
                         help="continue the run in --ckpt-dir (its last.pt, which must exist) with its "
-                             "own options; only --budget-minutes, --steps, --device, --ckpt-dir and "
+                             "own options; only --budget-minutes, --steps, --stop-after, --device, --ckpt-dir and "
                              "--results-dir may change")
     parser.add_argument("--init-from", dest="init_from", default=None,
                         help="start from these weights (e.g. training/checkpoints/mocap_pose.pt)")

@@ -254,6 +254,43 @@ def test_resume_continues_with_the_checkpoints_own_options(tmp_path, monkeypatch
     assert (ck["config"]["anchored"], ck["config"]["wrist_anchor"], ck["config"]["dropout"]) == (False, "forearm", 0.2)
 
 
+def test_a_run_stopped_and_resumed_ends_with_the_weights_of_an_uninterrupted_one(tmp_path):
+    """--stop-after then --resume (a run split over sittings, e.g. short GPU leases) takes exactly
+    the steps of an uninterrupted run: same batches, same LSTM state carried, same random draws."""
+    train_m = _motions(4, 0)
+
+    def config(name, **kw):
+        return tr.TrainConfig(size="tiny", batch=3, window=40, lr=3e-3, warmup=2, steps=9,
+                              budget_minutes=1e6, ckpt_dir=str(tmp_path / name / "ck"),
+                              results_dir=str(tmp_path / name / "res"), progress=False,
+                              smoke=True, eval_every_s=1e9, ckpt_every_s=1e9, **kw)
+
+    whole = config("whole")
+    assert tr.train(whole, train_m, [])["steps"] == 9
+    split = config("split", stop_after=4)
+    assert tr.train(split, train_m, [])["steps"] == 4
+    resumed = replace(split, resume=True, stop_after=None)
+    assert tr.train(resumed, train_m, [])["steps"] == 9
+    a = torch.load(str(tmp_path / "whole" / "ck" / "last.pt"), weights_only=False)
+    b = torch.load(str(tmp_path / "split" / "ck" / "last.pt"), weights_only=False)
+    for name, value in a["model"].items():
+        assert torch.equal(value, b["model"][name]), name
+    for x, y in zip(a["lstm_state"], b["lstm_state"]):
+        assert torch.equal(x, y)
+    assert a["batcher"]["pos"] == b["batcher"]["pos"]
+
+
+def test_stop_after_belongs_to_one_sitting(tmp_path, monkeypatch):
+    motions = _motions(3, 0)
+    monkeypatch.setattr(tr, "load_data", lambda cfg: (motions, []))
+    cfg = _cli(TINY_RUN + ["--steps", "5", "--stop-after", "2"] + _dirs(tmp_path))
+    assert cfg.stop_after == 2
+    assert tr.train(replace(cfg, progress=False))["steps"] == 2
+    again = _cli(["--resume"] + _dirs(tmp_path))
+    assert again.stop_after is None and again.steps == 5     # not stopped at once by the saved 2
+    assert _cli(["--resume", "--stop-after", "4"] + _dirs(tmp_path)).stop_after == 4
+
+
 def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys):
     from training.__main__ import main
     from training.cli import UsageError
