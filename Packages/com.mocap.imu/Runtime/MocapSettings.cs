@@ -30,7 +30,7 @@ namespace Mocap.Imu
         [Tooltip("Playback: capture file. Relative paths resolve against the project (\"Packages/...\" works for package files).")]
         public string captureFile = "Packages/com.mocap.imu/Tests/Runtime/Fixtures/walk.cap";
 
-        [Tooltip("Playback: at the recorded pace, pauses over 3 s shortened to 3 s (off: as fast as the engine can).")]
+        [Tooltip("Playback: at the recorded pace (off: as fast as the engine can).")]
         public bool playbackRealtime = true;
 
         [Tooltip("Playback: pace multiplier.")]

@@ -176,8 +176,7 @@ typedef struct mocap_session_config {
     float kalman_process_noise;     /* acceleration random-walk spectral density (m/s^3)^2/Hz */
     float kalman_measurement_noise; /* accelerometer noise variance (m/s^2)^2 */
     int32_t replay_realtime;  /* replay: 0 = as fast as possible, 1 = at recorded pace */
-    float replay_speed;       /* replay_realtime: pace multiplier (default 1); a pause in the
-                                 recording longer than 3 s plays as 3 s */
+    float replay_speed;       /* replay_realtime: pace multiplier (default 1) */
     int32_t auto_reconnect;   /* serial/HID: reopen after an unplug (default 1) */
     char capture_path[MOCAP_PATH_MAX]; /* if non-empty, record the raw byte stream here */
 } mocap_session_config;

@@ -15,10 +15,8 @@ typedef struct replay_transport {
     capture_reader *reader;
     int realtime;
     double speed;
-    int64_t first_mono_ns;  /* live time the pacing base record maps to */
-    int64_t first_record_ns; /* the pacing base: the first record, or the one after a gap */
-    int64_t last_record_ns;
-    int64_t last_due_ns;
+    int64_t first_mono_ns;  /* live time the first record maps to: when it was read */
+    int64_t first_record_ns;
     int have_first;
     /* The record being delivered: held while it is not yet due, or while a small cap makes
      * it come out in pieces. */
@@ -30,13 +28,6 @@ typedef struct replay_transport {
     int ended;
 } replay_transport;
 
-/* Longest wait between two records in a realtime replay, on the live clock. A recording holds
- * every pause of its session (sensors off, receiver unplugged for minutes); played back, such a
- * pause is shortened to this, which still shows the drop-out. A record recorded before the one
- * before it (a clock step) is due at once. Either way the recorded times are what the session
- * sees: only the pace changes. */
-#define MAX_REPLAY_GAP_NS 3000000000LL
-
 static int64_t due_time(replay_transport *r, int64_t recorded_ns)
 {
     if (!r->have_first) {
@@ -44,25 +35,16 @@ static int64_t due_time(replay_transport *r, int64_t recorded_ns)
          * within the gap between open and start would otherwise all be overdue at once. */
         r->first_mono_ns = mocap_monotonic_ns();
         r->first_record_ns = recorded_ns;
-        r->last_record_ns = recorded_ns;
-        r->last_due_ns = r->first_mono_ns;
         r->have_first = 1;
     }
-    /* In double because a damaged or hand-made capture can hold any int64 times, whose
-     * difference would overflow. */
-    const double step = ((double)recorded_ns - (double)r->last_record_ns) / r->speed;
-    r->last_record_ns = recorded_ns;
-    if (step < 0.0 || step > (double)MAX_REPLAY_GAP_NS) {
-        /* Pace the rest from here: this record is due the shortened gap after the last. */
-        r->first_record_ns = recorded_ns;
-        r->first_mono_ns = r->last_due_ns + (step < 0.0 ? 0 : MAX_REPLAY_GAP_NS);
-        r->last_due_ns = r->first_mono_ns;
-        return r->last_due_ns;
-    }
-    /* Offsets from the pacing base keep the arithmetic exact over long captures. */
-    const double offset = ((double)recorded_ns - (double)r->first_record_ns) / r->speed;
-    r->last_due_ns = r->first_mono_ns + (int64_t)llround(offset);
-    return r->last_due_ns;
+    /* Offsets from the first record keep the arithmetic exact over long captures. Taken in
+     * double and capped (at ~127 years either way) because a damaged or hand-made capture can
+     * hold any int64 times, whose difference would overflow. */
+    const double cap = 4.0e18;
+    double offset = ((double)recorded_ns - (double)r->first_record_ns) / r->speed;
+    if (offset > cap) offset = cap;
+    if (offset < -cap) offset = -cap;
+    return r->first_mono_ns + (int64_t)llround(offset);
 }
 
 static mocap_status replay_read(transport *t, uint8_t *buf, size_t cap, int timeout_ms,

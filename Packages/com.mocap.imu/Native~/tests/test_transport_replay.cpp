@@ -135,8 +135,8 @@ TEST(TransportReplay, RealtimeReadTimesOutWhileTheNextRecordIsNotDue)
 }
 
 // Times from either end of int64 (a damaged or hand-made capture): the pacing arithmetic must
-// not overflow (UBSan checks it); a record ~580 years after the first is not due yet (a long gap
-// plays as 3 s), and one before the first is due at once.
+// not overflow (UBSan checks it); a record ~580 years after the first is simply not due yet, and
+// one before the first is due at once.
 TEST(TransportReplay, WildTimestampsDoNotOverflowThePacing)
 {
     const std::string path = test_temp_path("wild.mcap");
@@ -243,44 +243,5 @@ TEST(TransportReplay, RealtimePacingStartsAtTheFirstReadNotAtOpen)
         ++delivered;
     }
     EXPECT_EQ(delivered, recs.size());
-    transport_close(t);
-}
-
-// A pause in the recording (sensors off for an hour) is shortened to 3 s in a realtime replay:
-// before, the replay showed nothing for the whole hour. A record from before the one before it
-// (a clock step back) is due at once, and the records after it keep their recorded spacing. The
-// times handed on are the recorded ones throughout.
-TEST(TransportReplay, RealtimeReplayShortensLongPausesAndClockStepsBack)
-{
-    const std::string path = test_temp_path("pause.mcap");
-    std::vector<Rec> recs = make_records(12, 6, 16, 0, 0);
-    const int64_t s = 1000000000LL;
-    const int64_t times[6] = {10 * s, 10 * s + s / 10, 3610 * s, 3610 * s + s / 2, 5 * s,
-                              5 * s + s / 2};
-    for (size_t i = 0; i < 6; i++) recs[i].ns = times[i];
-    write_capture(path, recs);
-    transport *t = nullptr;
-    ASSERT_EQ(transport_open_replay(path.c_str(), 1, 1.0, &t), MOCAP_OK) << mocap_last_error();
-    std::vector<uint8_t> buf(64);
-    std::vector<int64_t> delivered_at, stamps;
-    const int64_t give_up = mocap_monotonic_ns() + 60 * s;
-    while (stamps.size() < recs.size() && mocap_monotonic_ns() < give_up) {
-        size_t got = 0;
-        int64_t ns = 0;
-        mocap_status st = transport_read(t, buf.data(), buf.size(), 20, &got, &ns);
-        if (st == MOCAP_ERR_TIMEOUT) continue;
-        ASSERT_EQ(st, MOCAP_OK) << mocap_last_error();
-        delivered_at.push_back(mocap_monotonic_ns());
-        stamps.push_back(ns);
-    }
-    ASSERT_EQ(stamps.size(), recs.size()) << "the replay sat out the recorded pause";
-    for (size_t i = 0; i < recs.size(); i++) EXPECT_EQ(stamps[i], recs[i].ns) << i;
-    const auto gap_s = [&](size_t i) { return (delivered_at[i] - delivered_at[i - 1]) * 1e-9; };
-    EXPECT_GE(gap_s(1), 0.099);           // recorded spacing kept
-    EXPECT_GE(gap_s(2), 2.999);           // an hour's pause plays as 3 s...
-    EXPECT_LT(gap_s(2), 30.0);            // ...not as an hour
-    EXPECT_GE(gap_s(3), 0.499);           // and the spacing after it is the recorded one
-    EXPECT_LT(gap_s(4), 1.0);             // a step back in time: due at once
-    EXPECT_GE(gap_s(5), 0.499);           // paced from there on
     transport_close(t);
 }

@@ -65,8 +65,7 @@ namespace Mocap.Imu
         public float KalmanProcessNoise { get; set; }
         /// <summary>Kalman accelerometer noise variance, (m/s^2)^2.</summary>
         public float KalmanMeasurementNoise { get; set; }
-        /// <summary>Replay only: true plays at the recorded pace (a pause over 3 s in the
-        /// recording plays as 3 s), false as fast as possible.</summary>
+        /// <summary>Replay only: true plays at the recorded pace, false as fast as possible.</summary>
         public bool ReplayRealtime { get; set; }
         /// <summary>Replay only, with <see cref="ReplayRealtime"/>: pace multiplier.</summary>
         public float ReplaySpeed { get; set; }
