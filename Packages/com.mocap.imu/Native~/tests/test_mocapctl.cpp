@@ -265,6 +265,13 @@ TEST(Mocapctl, UnknownOptionsAreRefusedBeforeTheCommandRuns)
         {"bench decode --threads 2", "bench decode has no option --threads"},
         {"infer --model m.onnx --input i --output " + dir + "/o --frame 3", "infer has no option --frame"},
         {"version --verbose", "version has no option --verbose"},
+        // Options of another mode of the command would be ignored just the same.
+        {"stream --vmc 127.0.0.1:1 --port /dev/null --speed 2", "--speed applies to --replay only"},
+        {"stream --vmc 127.0.0.1:1 --replay " + dir + "/a.cap --baud 9600", "--baud applies to --port only"},
+        {"replay " + dir + "/a.cap --smoothing 2", "--smoothing applies to the pose model only"},
+        {"replay " + dir + "/a.cap --model m.onnx --rate 30", "--rate does not apply with the pose model"},
+        {"replay " + dir + "/a.cap --out " + dir + "/o.bvh --csv " + dir + "/f.csv", "use --pose-csv"},
+        {"live --port /dev/null --smoothing 2", "--smoothing applies to poses only"},
     };
     for (const auto &c : cases) {
         CommandResult r = run_command(c.args);
@@ -274,15 +281,20 @@ TEST(Mocapctl, UnknownOptionsAreRefusedBeforeTheCommandRuns)
     EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
     EXPECT_FALSE(std::filesystem::exists(dir + "/r.cap"));
     EXPECT_FALSE(std::filesystem::exists(dir + "/o"));
+    EXPECT_FALSE(std::filesystem::exists(dir + "/o.bvh"));
     // A value that looks like an option name is the value, not an option: a file called
     // --weird is still a file.
     ASSERT_EQ(run_command("synth --seconds 1 --out " + dir + "/a.cap --truth " + dir + "/t.csv").exit_code, 0);
     CommandResult negative = run_command("synth --out " + dir + "/b.cap --seconds -1");
     EXPECT_NE(negative.output.find("--seconds -1 is outside"), std::string::npos) << negative.output;
-    // `--help` after a command is an answer too.
+    // `--help` after a command is an answer too, but not as the value of an option.
     CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " replay --help 2>/dev/null)");
     EXPECT_EQ(help.exit_code, 0);
     EXPECT_NE(help.output.find("mocapctl stream --vmc"), std::string::npos) << help.output;
+    CommandResult named = run_shell("cd '" + dir + "' && " + std::string(MOCAP_MOCAPCTL) +
+                                    " synth --out -h --seconds 1");
+    EXPECT_EQ(named.exit_code, 0) << named.output;
+    EXPECT_TRUE(std::filesystem::exists(dir + "/-h")) << named.output;
 }
 
 // Every option the usage text shows is one its command takes: the list that refuses unknown

@@ -97,6 +97,17 @@ static int option_kind(const char *known, const char *name, size_t length)
     return 0;
 }
 
+int cli_asks_for_help(int argc, char **argv, const char *known)
+{
+    for (int i = 0; i < argc; ++i) {
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) return 1;
+        if (strncmp(argv[i], "--", 2) == 0 && option_kind(known, argv[i], strlen(argv[i])) == 2 &&
+            i + 1 < argc && strncmp(argv[i + 1], "--", 2) != 0)
+            ++i; /* its value, whatever it says */
+    }
+    return 0;
+}
+
 void cli_refuse_unknown(const char *command, int argc, char **argv, const char *known)
 {
     for (int i = 0; i < argc; ++i) {
@@ -111,6 +122,12 @@ void cli_refuse_unknown(const char *command, int argc, char **argv, const char *
                        (int)(equals - arg), arg, equals + 1);
         usage_exit("%s has no option %s ('mocapctl --help' lists them)", command, arg);
     }
+}
+
+void cli_refuse_option(int argc, char **argv, const char *name, const char *why)
+{
+    for (int i = 0; i < argc; ++i)
+        if (strcmp(argv[i], name) == 0) usage_exit("%s %s", name, why);
 }
 
 /* Both paths name one existing file (the same device and inode: links and other spellings

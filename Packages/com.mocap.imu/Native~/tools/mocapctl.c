@@ -608,6 +608,10 @@ static int cmd_replay(int argc, char **argv)
         arg_value(argc, argv, "--json") || arg_value(argc, argv, "--pose-csv") ||
         (truth_path && csv_first_row_columns(truth_path) == POSE_TRUTH_COLS))
         return cmd_replay_pose(argc, argv);
+    static const char *const pose_only[] = {"--smoothing", "--bvh-order", NULL};
+    for (int i = 0; pose_only[i]; ++i)
+        cli_refuse_option(argc, argv, pose_only[i],
+                          "applies to the pose model only (--model, --out, --json or --pose-csv)");
 
     replay_state *st = (replay_state *)calloc(1, sizeof *st);
     if (!st) return 1;
@@ -1162,9 +1166,9 @@ static int cmd_replay_pose(int argc, char **argv)
     mocap_model_info info;
     mocap_status s;
 
-    if (arg_value(argc, argv, "--csv"))
-        fprintf(stderr, "mocapctl: note: --csv (sensor frames) is not written with the pose model "
-                "(the solver consumes the frames); use --pose-csv\n");
+    /* The solver consumes the frames, at the model's rate. */
+    cli_refuse_option(argc, argv, "--csv", "(sensor frames) is not written with the pose model; use --pose-csv");
+    cli_refuse_option(argc, argv, "--rate", "does not apply with the pose model: frames come at its rate");
     if (truth_path) {
         int cols = csv_first_row_columns(truth_path);
         if (cols < 0) {
@@ -1570,6 +1574,7 @@ static int cmd_live(int argc, char **argv)
     /* Read before anything is opened: a bad value must not leave an empty capture behind. */
     const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
     const int with_model = arg_value(argc, argv, "--model") != NULL || arg_flag(argc, argv, "--pose");
+    if (!with_model) cli_refuse_option(argc, argv, "--smoothing", "applies to poses only (add --pose or --model)");
     mocap_model *model = NULL;
     mocap_model_info info;
     /* The model first: the session's output rate is the model's frame rate. */
@@ -1680,6 +1685,13 @@ static int cmd_stream(int argc, char **argv)
         fprintf(stderr, "mocapctl stream: give --vmc HOST:PORT (e.g. 127.0.0.1:39539) and either "
                         "--replay CAPTURE or --port DEV\n");
         return usage();
+    }
+    if (port) {
+        static const char *const replay_only[] = {"--speed", "--realtime", "--prelude", NULL};
+        for (int i = 0; replay_only[i]; ++i)
+            cli_refuse_option(argc, argv, replay_only[i], "applies to --replay only");
+    } else {
+        cli_refuse_option(argc, argv, "--baud", "applies to --port only");
     }
     const int characters = port ? 1 : nrep;
     if (ndest != characters) {
@@ -1842,21 +1854,12 @@ static const struct {
     {"version", ""},
 };
 
-static int asks_for_help(int argc, char **argv)
-{
-    for (int i = 0; i < argc; ++i)
-        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) return 1;
-    return 0;
-}
-
-/* Refuses an option `command` does not take (usage error, exit 2). */
-static void check_options(const char *command, int argc, char **argv)
+/* The option list of `command` (NULL for an unknown command). */
+static const char *options_of(const char *command)
 {
     for (size_t i = 0; i < sizeof command_options / sizeof command_options[0]; ++i)
-        if (strcmp(command_options[i].command, command) == 0) {
-            cli_refuse_unknown(command, argc, argv, command_options[i].options);
-            return;
-        }
+        if (strcmp(command_options[i].command, command) == 0) return command_options[i].options;
+    return NULL;
 }
 
 int main(int argc, char **argv)
@@ -1864,11 +1867,16 @@ int main(int argc, char **argv)
     if (argc < 2) return usage();
     signal(SIGINT, on_interrupt);
     const char *cmd = argv[1];
-    if (strcmp(cmd, "help") == 0 || asks_for_help(argc - 1, argv + 1)) return print_usage(stdout, 0);
-    if (strcmp(cmd, "bench") == 0 && argc >= 3)
-        check_options(strcmp(argv[2], "decode") == 0 ? "bench decode" : "bench", argc - 3, argv + 3);
-    else
-        check_options(cmd, argc - 2, argv + 2);
+    if (strcmp(cmd, "help") == 0 || strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0)
+        return print_usage(stdout, 0);
+    /* The command's options: asked for help, or refused when the command does not take them. */
+    const int bench_sub = strcmp(cmd, "bench") == 0 && argc >= 3;
+    const char *name = bench_sub ? (strcmp(argv[2], "decode") == 0 ? "bench decode" : "bench") : cmd;
+    const char *options = options_of(name);
+    if (options) { /* bench's subcommand is a plain word: both checks pass over it */
+        if (cli_asks_for_help(argc - 2, argv + 2, options)) return print_usage(stdout, 0);
+        cli_refuse_unknown(name, argc - 2, argv + 2, options);
+    }
     if (strcmp(cmd, "synth") == 0) return cmd_synth(argc - 2, argv + 2);
     if (strcmp(cmd, "replay") == 0) return cmd_replay(argc - 2, argv + 2);
     if (strcmp(cmd, "live") == 0) return cmd_live(argc - 2, argv + 2);
