@@ -38,6 +38,8 @@ namespace Mocap.Imu
     public sealed class MocapSessionComponent : MonoBehaviour
     {
         const int DrainCapacity = 32;
+        // Enough rounds to empty the engine's whole queue (1024 poses) in one frame after a pause.
+        const int MaxDrainRounds = 1024 / DrainCapacity + 2;
 
         [Tooltip("Model, solver and one source per character.")]
         public MocapSettings settings;
@@ -128,6 +130,7 @@ namespace Mocap.Imu
         MocapPose[] _latest = Array.Empty<MocapPose>();
         bool[] _hasPose = Array.Empty<bool>();
         ulong[] _poseCount = Array.Empty<ulong>();
+        ulong[] _posesDroppedSeen = Array.Empty<ulong>();
         readonly MocapPose[] _drain = new MocapPose[DrainCapacity];
 
         /// <summary>Current status (also shown in the inspector).</summary>
@@ -379,7 +382,7 @@ namespace Mocap.Imu
                     if (solver.IsEndOfStream(c)) continue;
                     allEnded = false;
                     // Drain everything solved since the last frame, keep the newest.
-                    for (int round = 0; round < 8; round++)
+                    for (int round = 0; round < MaxDrainRounds; round++)
                     {
                         var result = solver.Drain(c, _drain, out int count);
                         if (count > 0)
@@ -390,6 +393,14 @@ namespace Mocap.Imu
                             if (PoseSolved != null) RaisePoseSolved(c, count);
                         }
                         if (result != MocapPollResult.Frames || count < DrainCapacity) break;
+                    }
+                    // After a pause longer than the engine's queue the drained poses are old.
+                    if (solver.CatchUp(c, ref _posesDroppedSeen[c], ref _latest[c]) == MocapPollResult.Frames)
+                    {
+                        _hasPose[c] = true;
+                        _poseCount[c]++;
+                        _drain[0] = _latest[c];
+                        if (PoseSolved != null) RaisePoseSolved(c, 1);
                     }
                 }
                 if (allEnded)
@@ -440,9 +451,11 @@ namespace Mocap.Imu
                 _latest = new MocapPose[n];
                 _hasPose = new bool[n];
                 _poseCount = new ulong[n];
+                _posesDroppedSeen = new ulong[n];
             }
             Array.Clear(_hasPose, 0, n);
             Array.Clear(_poseCount, 0, n);
+            Array.Clear(_posesDroppedSeen, 0, n); // a new engine counts from zero
             SetStatus(MocapComponentStatus.Running, "");
             try { Opened?.Invoke(this); }
             catch (Exception e) { Debug.LogException(e, this); }

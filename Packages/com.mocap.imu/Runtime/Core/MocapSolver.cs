@@ -193,6 +193,24 @@ namespace Mocap.Imu
         }
 
         /// <summary>
+        /// For a consumer that drains every pose but shows the newest: after a pause longer than
+        /// the engine keeps (1024 poses, about 17 s at 60 Hz: an editor paused, a breakpoint)
+        /// the poses beyond those were dropped, and the newest one <see cref="Drain"/> returns is
+        /// as old as the pause. When poses were dropped since <paramref name="droppedSeen"/>
+        /// (the character's <see cref="MocapSolverStats.PosesDropped"/> at the previous call,
+        /// updated here), this polls the newest pose into <paramref name="pose"/>; otherwise it
+        /// returns <see cref="MocapPollResult.NoData"/> and takes nothing, so drained poses stay
+        /// complete in normal running. Call it after draining. Allocates nothing.
+        /// </summary>
+        public MocapPollResult CatchUp(int character, ref ulong droppedSeen, ref MocapPose pose)
+        {
+            ulong dropped = GetStats(character).PosesDropped;
+            if (dropped == droppedSeen) return MocapPollResult.NoData;
+            droppedSeen = dropped;
+            return PollLatest(character, ref pose);
+        }
+
+        /// <summary>
         /// Copy the character's poses solved since the previous drain, oldest first, into
         /// <paramref name="destination"/> (up to its length); <paramref name="count"/> receives how
         /// many. Poses that do not fit stay queued. Allocates nothing.

@@ -286,6 +286,49 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void CatchUpGivesTheNewestPoseAfterAPauseLongerThanTheEngineQueue()
+        {
+            // 22 s of motion, about 1,350 poses, at 10x the recorded pace: realtime, so the
+            // engine drops what its 1024-pose queue cannot hold while nobody drains.
+            var capture = TestPaths.Synth("mixed", seconds: 22, seed: 5);
+            using var session = SolverReplay.OpenCalibratedReplay(capture, _model.Info.FrameRate,
+                                                                  realtime: true, speed: 10f);
+            using var solver = MocapSolver.Open(_model);
+            solver.AddCharacter(session);
+            solver.Start();
+            session.Start();
+            var watch = Stopwatch.StartNew();
+            ulong done = ulong.MaxValue;
+            for (;;) // the pause: until the replay ended and the solver has nothing left
+            {
+                System.Threading.Thread.Sleep(300);
+                var s = solver.GetStats(0);
+                ulong now = s.FramesSolved + s.FramesUncalibrated;
+                if (session.GetStats().ConnectionState == MocapConnectionState.Ended && now == done) break;
+                done = now;
+                Assert.Less(watch.Elapsed.TotalSeconds, 120, "the replay did not end");
+            }
+            var stats = solver.GetStats(0);
+            Assume.That(stats.PosesDropped, Is.GreaterThan(0UL), "the queue never filled");
+
+            ulong seen = 0;
+            var pose = default(MocapPose);
+            // In normal running (nothing dropped since the last look) CatchUp takes nothing.
+            ulong alreadySeen = stats.PosesDropped;
+            Assert.AreEqual(MocapPollResult.NoData, solver.CatchUp(0, ref alreadySeen, ref pose));
+            var drained = new List<MocapPose>();
+            var buffer = new MocapPose[32];
+            while (solver.Drain(0, buffer, out int n) == MocapPollResult.Frames)
+                for (int i = 0; i < n; i++) drained.Add(buffer[i]);
+            Assert.AreEqual(1024, drained.Count, "the engine keeps its queue's 1024 oldest poses");
+            Assert.AreEqual(MocapPollResult.Frames, solver.CatchUp(0, ref seen, ref pose));
+            Assert.AreEqual(stats.PosesDropped, seen);
+            Assert.AreEqual(stats.FramesSolved, pose.Sequence + 1, "not the newest pose");
+            Assert.Greater(pose.Sequence, drained[drained.Count - 1].Sequence);
+            Assert.AreEqual(MocapPollResult.NoData, solver.CatchUp(0, ref seen, ref pose));
+        }
+
+        [Test]
         public void AWrongModelPathThrowsNamingTheFile()
         {
             var path = Path.Combine(TestPaths.NewTempDirectory("nomodel"), "missing_model.onnx");
