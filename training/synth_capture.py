@@ -40,6 +40,7 @@ replay CAPTURE --truth SENSOR_CSV` compares the calibrated output against it.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import subprocess
 import sys
@@ -50,6 +51,7 @@ import numpy as np
 from . import skeleton as sk
 
 TRAJECTORY_RATE = 100.0
+MAX_LEAD_IN_S = 60.0   # a blend from the T-pose into the clip; minutes of it would be a mistake
 
 
 def _smooth(u):
@@ -146,7 +148,8 @@ def _read_motion_start(sensor_csv) -> tuple[float, float]:
                 start = t
                 break
     if first is None or start is None:
-        raise RuntimeError(f"{sensor_csv}: no motion phase rows")
+        from .cli import CommandError
+        raise CommandError(f"{sensor_csv}: no motion phase rows (mocapctl wrote no motion)")
     return first, start
 
 
@@ -168,19 +171,61 @@ def write_truth_csv(path, local_rot, root_pos, fps, t_session_start, motion_star
             f.write(",".join(vals) + "\n")
 
 
+def _same_file(a: Path, b: Path) -> bool:
+    if a.exists() and b.exists():
+        return os.path.samefile(a, b)
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _check_outputs(bvh_path, outputs: dict) -> None:
+    """Every output is a new or regular file, none is the BVH being read, no two are one file:
+    writing one would otherwise destroy the input or another output before it is used."""
+    from .cli import UsageError
+    named = list(outputs.items())
+    for i, (what, path) in enumerate(named):
+        if path.exists() and not path.is_file():
+            raise UsageError(f"{what} {path}: not a regular file (a folder or a device)")
+        if bvh_path is not None and _same_file(path, Path(bvh_path)):
+            raise UsageError(f"{what} {path} is the BVH clip this command reads: writing it would destroy it")
+        for other, other_path in named[:i]:
+            if _same_file(path, other_path):
+                raise UsageError(f"{other} and {what} name the same file ({path})")
+
+
+def _remove_new(paths, existed: dict) -> None:
+    """After a failure: remove the outputs this run created (a file that was there before is
+    left as it is: it may be a user's earlier result)."""
+    for path in paths:
+        if not existed.get(path, True):
+            try:
+                path.unlink()
+            except OSError:
+                pass
+
+
 def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="nwu",
                   noise="realistic", lead_in=1.0, keep_trajectory=False, motion=None,
                   truth_csv=None):
     """Write CAPTURE, its sensor truth CSV and the pose truth .npz; returns a dict of paths and
     facts. `motion` (a Motion) replaces reading bvh_path when given."""
     from .ort import mocapctl_path
-    from .cli import UsageError
+    from .cli import CommandError, UsageError
+    if not (isinstance(seed, (int, np.integer)) and 0 <= int(seed) < 2 ** 64):
+        raise UsageError(f"--seed {seed}: a whole number from 0 to 2^64-1")
+    if not (math.isfinite(lead_in) and 0.0 <= lead_in <= MAX_LEAD_IN_S):
+        raise UsageError(f"--lead-in {lead_in}: seconds from 0 to {MAX_LEAD_IN_S:g}")
+    if str(out).endswith(("/", os.sep)):
+        raise UsageError(f"--out {out}: names a folder; give the capture file to write")
     out = Path(out)
     truth = Path(truth) if truth else out.with_suffix(".truth.npz")
     if truth.suffix != ".npz":   # np.savez would append it: name the file it really writes
         truth = truth.with_name(truth.name + ".npz")
     sensor_truth = Path(sensor_truth) if sensor_truth else out.with_suffix(".sensors.csv")
     truth_csv = Path(truth_csv) if truth_csv else out.with_suffix(".truth.csv")
+    traj = out.with_suffix(".trajectory.txt")
+    outputs = {"--out": out, "--truth": truth, "--sensor-truth": sensor_truth,
+               "--truth-csv": truth_csv, "the trajectory": traj}
+    _check_outputs(bvh_path if motion is None else None, outputs)
     if motion is None:
         from .bvh import read_bvh
         from .retarget import to_smpl_motion
@@ -201,25 +246,36 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
     full = with_lead_in(motion, lead_in)
     ori, acc = sensor_signals(full)
     t, quats, acc100 = resample_signals(ori, acc, full.fps)
-    traj = out.with_suffix(".trajectory.txt")
     out.parent.mkdir(parents=True, exist_ok=True)
-    write_trajectory(traj, t, quats, acc100, comment=f"{motion.name}, lead-in {lead_in} s")
-    cmd = [str(mocapctl_path(require_onnx=False)), "synth", "--trajectory", str(traj), "--out", str(out),
-           "--truth", str(sensor_truth), "--seed", str(int(seed)), "--world", world,
-           "--noise", noise]
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise RuntimeError(f"mocapctl synth failed: {r.stderr.strip()}")
-    if not keep_trajectory:
-        traj.unlink()
-    t_first, t_motion = _read_motion_start(sensor_truth)
-    n_lead = full.num_frames - motion.num_frames
-    np.savez(truth, local_rot=full.local_rot, root_pos=full.root_pos, offsets=full.offsets,
-             fps=np.float64(full.fps), joint_names=np.array(sk.JOINT_NAMES),
-             parents=np.array(sk.PARENTS), motion_start=np.int64(n_lead),
-             t_session_start=np.float64(t_motion), prelude_s=np.float64(t_motion - t_first),
-             clip=str(motion.name), world=world, seed=np.int64(seed))
-    write_truth_csv(truth_csv, full.local_rot, full.root_pos, full.fps, t_motion, n_lead)
+    existed = {p: p.exists() for p in outputs.values()}
+    writing = traj
+    try:
+        write_trajectory(traj, t, quats, acc100, comment=f"{motion.name}, lead-in {lead_in} s")
+        cmd = [str(mocapctl_path(require_onnx=False)), "synth", "--trajectory", str(traj), "--out",
+               str(out), "--truth", str(sensor_truth), "--seed", str(int(seed)), "--world", world,
+               "--noise", noise]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise CommandError("mocapctl synth failed: " + (r.stderr.strip() or f"status {r.returncode}"))
+        if not keep_trajectory:
+            traj.unlink()
+        t_first, t_motion = _read_motion_start(sensor_truth)
+        n_lead = full.num_frames - motion.num_frames
+        writing = truth
+        np.savez(truth, local_rot=full.local_rot, root_pos=full.root_pos, offsets=full.offsets,
+                 fps=np.float64(full.fps), joint_names=np.array(sk.JOINT_NAMES),
+                 parents=np.array(sk.PARENTS), motion_start=np.int64(n_lead),
+                 t_session_start=np.float64(t_motion), prelude_s=np.float64(t_motion - t_first),
+                 clip=str(motion.name), world=world, seed=np.int64(seed))
+        writing = truth_csv
+        write_truth_csv(truth_csv, full.local_rot, full.root_pos, full.fps, t_motion, n_lead)
+    except OSError as e:
+        # A full disk or an unwritable folder: say which file, and leave no half of the set.
+        _remove_new(outputs.values(), existed)
+        raise CommandError(f"writing {e.filename or writing}: {e.strerror or e}") from e
+    except BaseException:
+        _remove_new(outputs.values(), existed)
+        raise
     return {"capture": out, "truth": truth, "truth_csv": truth_csv, "sensor_truth": sensor_truth,
             "trajectory": traj if keep_trajectory else None, "frames": full.num_frames,
             "motion_start": n_lead, "t_session_start": t_motion, "prelude_s": t_motion - t_first,
@@ -231,6 +287,26 @@ def load_truth(path) -> dict:
         return {k: z[k] for k in z.files}
 
 
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value < 2 ** 64:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number from 0 to 2^64-1")
+    return value
+
+
+def _lead_in(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0.0 <= value <= MAX_LEAD_IN_S):
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number of seconds from 0 to {MAX_LEAD_IN_S:g}")
+    return value
+
+
 def add_arguments(p=None):
     p = p or argparse.ArgumentParser(prog="python3 -m training synth-capture",
                                      description=__doc__.split("\n")[0])
@@ -239,10 +315,11 @@ def add_arguments(p=None):
     p.add_argument("--truth", help="pose truth .npz (default: CAPTURE.truth.npz)")
     p.add_argument("--truth-csv", help="pose truth as CSV (default: CAPTURE.truth.csv)")
     p.add_argument("--sensor-truth", help="per-sensor truth CSV from mocapctl (default: CAPTURE.sensors.csv)")
-    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--seed", type=_seed, default=1, help="noise and mounting draws (0 to 2^64-1)")
     p.add_argument("--world", choices=["nwu", "enu"], default="nwu")
     p.add_argument("--noise", choices=["realistic", "none"], default="realistic")
-    p.add_argument("--lead-in", type=float, default=1.0, help="seconds of T-pose -> clip blend")
+    p.add_argument("--lead-in", type=_lead_in, default=1.0,
+                   help=f"seconds of T-pose -> clip blend (0 to {MAX_LEAD_IN_S:g})")
     p.add_argument("--keep-trajectory", action="store_true", help="keep CAPTURE.trajectory.txt")
     return p
 

@@ -69,3 +69,57 @@ def test_truth_path_without_npz_suffix_is_the_file_written(tmp_path, monkeypatch
         info = sc.synth_capture(None, tmp_path / "c.cap", truth=tmp_path / given, motion=motion)
         assert info["truth"] == tmp_path / written and info["truth"].is_file()
         assert int(sc.load_truth(info["truth"])["motion_start"]) == 60
+
+
+def _clip(tmp_path, seconds=1.0):
+    path = tmp_path / "clip.bvh"
+    bvh.write_bvh(path, procedural.motion_to_daz(procedural.make_motion("walk", seconds, seed=3)))
+    return path
+
+
+def test_outputs_that_would_destroy_the_clip_or_each_other_are_refused(tmp_path):
+    """`--out clip.bvh` (or --truth-csv / --sensor-truth) replaced the BVH being read; two outputs
+    naming one file overwrote each other; an existing folder as output was half written."""
+    from training.cli import UsageError
+    clip = _clip(tmp_path)
+    before = clip.read_bytes()
+    for option in ("--out", "--truth-csv", "--sensor-truth"):
+        argv = [str(clip), "--out", str(tmp_path / "x.cap"), option, str(clip)]
+        with pytest.raises(UsageError, match="is the BVH clip this command reads"):
+            sc.main(argv)
+        assert clip.read_bytes() == before
+    with pytest.raises(UsageError, match="name the same file"):
+        sc.main([str(clip), "--out", str(tmp_path / "y.cap"), "--truth-csv", str(tmp_path / "y.cap")])
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(UsageError, match="not a regular file"):
+        sc.main([str(clip), "--out", str(tmp_path / "folder")])
+    with pytest.raises(UsageError, match="names a folder"):
+        sc.main([str(clip), "--out", str(tmp_path / "newfolder") + "/"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.bvh", "folder"]
+
+
+@pytest.mark.parametrize("option,value", [("--seed", "-1"), ("--seed", "x"), ("--lead-in", "nan"),
+                                          ("--lead-in", "inf"), ("--lead-in", "-1"),
+                                          ("--lead-in", "100000")])
+def test_out_of_range_values_are_usage_errors(tmp_path, option, value, capsys):
+    with pytest.raises(SystemExit) as e:
+        sc.main([str(tmp_path / "clip.bvh"), "--out", str(tmp_path / "x.cap"), option, value])
+    assert e.value.code == 2
+    assert option in capsys.readouterr().err
+
+
+def test_a_failing_engine_step_is_one_error_and_leaves_no_files(tmp_path):
+    """mocapctl synth cannot write the sensor truth (its folder does not exist): before, a
+    traceback, and the trajectory and a capture were left behind."""
+    from training.cli import CommandError
+    clip = _clip(tmp_path)
+    with pytest.raises(CommandError, match="mocapctl synth failed: .*missing"):
+        sc.main([str(clip), "--out", str(tmp_path / "x.cap"),
+                 "--sensor-truth", str(tmp_path / "missing" / "s.csv")])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.bvh"]
+    # A file that was there before a failed run is not removed: it may be an earlier result.
+    (tmp_path / "x.cap").write_bytes(b"earlier")
+    with pytest.raises(CommandError):
+        sc.main([str(clip), "--out", str(tmp_path / "x.cap"),
+                 "--sensor-truth", str(tmp_path / "missing" / "s.csv")])
+    assert (tmp_path / "x.cap").exists()
