@@ -11,36 +11,35 @@ dropout) can be averaged; the result keeps the first checkpoint's config.
 """
 from __future__ import annotations
 
+import math
+import os
 from pathlib import Path
 
 import torch
 
-from .model import ModelConfig
-from .train import atomic_torch_save, load_checkpoint_file
+from .cli import UsageError
+from .model import ModelConfig, non_finite_tensors
+from .train import atomic_torch_save, checkpoint_model_config, load_checkpoint_file
 
 
 def average_state_dicts(states: list, weights: list | None = None) -> dict:
     """The weighted mean of state dicts with the same keys and shapes. Integer tensors (counters)
-    are taken from the first."""
+    are taken from the first. Bad input is a UsageError (a ValueError)."""
     if not states:
-        raise ValueError("average: no checkpoints given")
-    weights = [1.0] * len(states) if weights is None else [float(w) for w in weights]
-    if len(weights) != len(states):
-        raise ValueError(f"average: {len(weights)} weights for {len(states)} checkpoints")
-    if any(not w >= 0 for w in weights) or sum(weights) <= 0:
-        raise ValueError("average: weights must be >= 0 with a positive sum")
+        raise UsageError("no checkpoints given")
+    weights = check_weights(weights, len(states))
     total = sum(weights)
     keys = list(states[0])
     for i, s in enumerate(states[1:], 1):
         if list(s) != keys:
             missing = sorted(set(keys) ^ set(s))
-            raise ValueError(f"average: checkpoint {i} has different parameters ({missing[:3]}...)")
+            raise UsageError(f"checkpoint {i} has different parameters ({missing[:3]}...)")
     out = {}
     for k in keys:
         first = states[0][k]
         for i, s in enumerate(states[1:], 1):
             if s[k].shape != first.shape:
-                raise ValueError(f"average: {k} has shape {tuple(s[k].shape)} in checkpoint {i}, "
+                raise UsageError(f"{k} has shape {tuple(s[k].shape)} in checkpoint {i}, "
                                  f"{tuple(first.shape)} in checkpoint 0")
         if not first.is_floating_point():
             out[k] = first.clone()
@@ -52,35 +51,60 @@ def average_state_dicts(states: list, weights: list | None = None) -> dict:
     return out
 
 
+def check_weights(weights, n: int) -> list:
+    """The averaging weights as floats (default: equal), or a UsageError: one per checkpoint,
+    each finite and >= 0, with a positive sum (an inf or NaN weight makes the soup NaN)."""
+    weights = [1.0] * n if weights is None else [float(w) for w in weights]
+    if len(weights) != n:
+        raise UsageError(f"--weights: {len(weights)} weights for {n} checkpoints")
+    if any(not (math.isfinite(w) and w >= 0) for w in weights) or sum(weights) <= 0:
+        raise UsageError(f"--weights {' '.join(f'{w:g}' for w in weights)}: weights must be finite "
+                         f"and >= 0 with a positive sum")
+    return weights
+
+
 def average_checkpoints(paths: list, out, weights: list | None = None) -> dict:
-    """Average checkpoint files (training or weights-only) into a weights-only checkpoint."""
+    """Average checkpoint files (training or weights-only) into a weights-only checkpoint. Bad
+    input (files that do not fit together, non-finite weights, --out naming an input) is a
+    UsageError naming the file."""
+    weights = check_weights(weights, len(paths))
+    for p in paths:
+        # The soup is written over --out: an input there would be lost, replaced by the mean.
+        if Path(out).exists() and Path(p).exists() and os.path.samefile(p, out):
+            raise UsageError(f"--out {out} is one of the checkpoints to average ({p}); write the "
+                             f"average to another file")
     cks = [load_checkpoint_file(p) for p in paths]
+    for p, ck in zip(paths, cks):
+        if not isinstance(ck, dict) or not isinstance(ck.get("model"), dict) or not isinstance(ck.get("config"), dict):
+            raise UsageError(f"{p} is not a pose model checkpoint (no 'model' weights and 'config')")
+        bad = non_finite_tensors(ck["model"])
+        if bad:
+            raise UsageError(f"{p}: the weights hold NaN or inf ({', '.join(bad[:3])}"
+                             f"{', ...' if len(bad) > 3 else ''}); the average would be NaN")
     config = cks[0]["config"]
     for p, ck in zip(paths[1:], cks[1:]):
-        if _architecture(ck["config"]) != _architecture(config):
-            raise ValueError(f"average: {p} is a different architecture from {paths[0]}")
+        if _architecture(ck, p) != _architecture(cks[0], paths[0]):
+            raise UsageError(f"{p} is a different architecture from {paths[0]}")
     state = average_state_dicts([ck["model"] for ck in cks], weights)
     result = {"model": state, "config": config, "step": None, "best": None,
               "averaged_from": [str(p) for p in paths],
-              "average_weights": list(weights) if weights else [1.0] * len(paths)}
+              "average_weights": weights}
     atomic_torch_save(result, Path(out))
     return result
 
 
-def _architecture(config: dict) -> ModelConfig:
+def _architecture(ck: dict, path) -> ModelConfig:
     """What must agree between averaged networks: the model config without dropout (training
     only; older configs without wrist_anchor read as "hand", as ModelConfig.from_dict does)."""
-    cfg = ModelConfig.from_dict(config)
+    cfg = checkpoint_model_config(ck, path)
     cfg.dropout = 0.0
     return cfg
 
 
 def main(args) -> int:
-    try:
-        average_checkpoints(args.checkpoints, args.out, args.weights)
-    except (ValueError, KeyError, OSError) as e:
-        print(f"average: {e}")
-        return 1
+    # Bad input raises UsageError, a failed write CommandError: python3 -m training prints them as
+    # one line on stderr with exit status 1.
+    average_checkpoints(args.checkpoints, args.out, args.weights)
     print(f"average: {len(args.checkpoints)} checkpoints -> {args.out}")
     return 0
 

@@ -8,8 +8,12 @@ Reader semantics
   into its parent frame; rest pose = all angles zero.
 - Position channels give the joint's translation in its parent frame and REPLACE its OFFSET
   (an axis without a channel keeps the OFFSET value). For the root this is `root_pos`.
-- MOTION: `Frames: N`, `Frame Time: dt`, then N lines of numbers (read as one flat array).
+- MOTION: `Frames: N`, `Frame Time: dt`, then N lines of numbers, each holding exactly one value
+  per declared channel (a line with more or fewer is refused: read as one flat array, it would
+  shift every later frame onto the wrong channels). Fewer lines than N: a warning, the lines held
+  are used (a cut file); more: a warning, the first N are used.
 Units are whatever the file uses (cm for the CMU data); nothing is converted here.
+Errors are BvhError; read_bvh's messages and warnings name the file.
 """
 from __future__ import annotations
 
@@ -31,6 +35,12 @@ class BvhError(ValueError):
     pass
 
 
+# Motion capture records 24 to 120+ frames per second (CMU: 1/120 s, re-published at 1/24 and
+# 1/12 s). A Frame Time above this is a damaged file, and resampling it to 60 Hz would create 60
+# frames per source frame or more (Frame Time 1e6 asked for ~24 GB).
+MAX_FRAME_TIME = 1.0
+
+
 @dataclass
 class BvhClip:
     joints: list                      # names, depth-first file order
@@ -43,6 +53,7 @@ class BvhClip:
     end_sites: dict = field(default_factory=dict)   # joint index -> (3,) End Site offset
     translations: Optional[np.ndarray] = None       # (F,J,3) local translations when any non-root
                                                     # joint has position channels, else None
+    source: str = ""                                # the file it was read from (for messages)
 
     @property
     def num_frames(self) -> int:
@@ -174,11 +185,47 @@ def _parse_hierarchy(tokens):
 
 
 _MOTION_RE = re.compile(r"\bMOTION\b")
-_FRAMES_RE = re.compile(r"Frames\s*:\s*(\d+)", re.IGNORECASE)
-_FTIME_RE = re.compile(r"Frame\s+Time\s*:\s*([-+0-9.eE]+)", re.IGNORECASE)
+_FRAMES_RE = re.compile(r"Frames\s*:[ \t]*(\S*)", re.IGNORECASE)
+_FTIME_RE = re.compile(r"Frame\s+Time\s*:[ \t]*(\S*)", re.IGNORECASE)
 
 
-def parse_bvh(text: str) -> BvhClip:
+def _frame_time(value: str) -> float:
+    try:
+        frame_time = float(value)
+    except ValueError:
+        raise BvhError(f"Frame Time {value!r} is not a number") from None
+    if not (frame_time > 0 and math.isfinite(frame_time)):
+        raise BvhError(f"Frame Time {value!r} is not a positive finite number of seconds")
+    if frame_time > MAX_FRAME_TIME:
+        raise BvhError(f"Frame Time {value} s is implausible (more than {MAX_FRAME_TIME:g} s per frame; "
+                       "motion capture records 24 frames per second or more)")
+    return frame_time
+
+
+def _values_per_line(body: str) -> np.ndarray:
+    """Number of whitespace-separated values on each line of body, vectorised over the bytes (the
+    CMU set has 4 million motion lines; a Python loop over them would double the reading time)."""
+    b = np.frombuffer(body.encode("utf-8", "replace"), dtype=np.uint8)
+    space = b <= 32                      # whitespace (other control bytes fail as numbers later)
+    newlines = np.flatnonzero(b == 10)
+    starts = np.flatnonzero(space[:-1] & ~space[1:]) + 1      # first byte of each value
+    if b.size and not space[0]:
+        starts = np.concatenate([[0], starts])
+    return np.bincount(np.searchsorted(newlines, starts), minlength=newlines.size + 1)
+
+
+def _first_bad_number(body: str, first_line: int) -> str:
+    for k, line in enumerate(body.split("\n")):
+        for tok in line.split():
+            try:
+                float(tok)
+            except ValueError:
+                return f"line {first_line + k}: {tok!r} is not a number"
+    return "a value that is not a number"
+
+
+def parse_bvh(text: str, source: str = "") -> BvhClip:
+    """source: the file name, for warnings and BvhClip.source (read_bvh adds it to errors)."""
     m = _MOTION_RE.search(text)
     if m is None:
         raise BvhError("no MOTION section")
@@ -187,37 +234,45 @@ def parse_bvh(text: str) -> BvhClip:
     mt = _FTIME_RE.search(text, m.end())
     if mf is None or mt is None:
         raise BvhError("MOTION needs 'Frames:' and 'Frame Time:'")
+    if not re.fullmatch(r"[0-9]+", mf.group(1)):
+        raise BvhError(f"Frames {mf.group(1)!r} is not a whole number of frames")
     n_frames = int(mf.group(1))
-    frame_time = float(mt.group(1))
-    if not (frame_time > 0 and math.isfinite(frame_time)):
-        raise BvhError(f"bad Frame Time {frame_time}")
+    frame_time = _frame_time(mt.group(1))
     nl = text.find("\n", max(mt.end(), mf.end()))
     body = text[nl + 1:] if nl >= 0 else ""
+    first_line = text.count("\n", 0, nl + 1) + 1          # file line number of body line 0
     n_ch = sum(len(c) for c in channels)
+    counts = _values_per_line(body)
+    lines = np.flatnonzero(counts)                          # body lines that hold values
+    wrong = lines[counts[lines] != n_ch]
+    if wrong.size:
+        raise BvhError(f"line {first_line + wrong[0]} holds {counts[wrong[0]]} values, but the HIERARCHY "
+                       f"declares {n_ch} channels (every motion line must hold one value per channel)")
+    name = source or "BVH"
+    if n_ch and lines.size < n_frames:
+        warnings.warn(f"{name}: declares {n_frames} frames but holds {lines.size}; using {lines.size}")
+        n_frames = int(lines.size)
+    elif lines.size > n_frames:
+        warnings.warn(f"{name}: holds {lines.size} frames but declares {n_frames}; using the first {n_frames}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
         data = np.fromstring(body, sep=" ") if body.strip() else np.zeros(0)
-    expected = n_frames * n_ch
-    if data.size < expected:
-        # np.fromstring stops at the first bad token: find out whether the file is short or broken
-        toks = body.split()
+    if data.size != lines.size * n_ch:
+        # np.fromstring stops at the first bad token: say which one
         try:
-            full = np.array(toks, dtype=np.float64)
-        except ValueError as e:
-            raise BvhError(f"non-numeric value in MOTION data: {e}") from e
-        if full.size != data.size:
-            data = full
-        n_frames = data.size // n_ch if n_ch else n_frames
-        warnings.warn(f"BVH declares more frames than it holds; using {n_frames}")
+            data = np.array(body.split(), dtype=np.float64)
+        except ValueError:
+            raise BvhError(_first_bad_number(body, first_line)) from None
     data = data[:n_frames * n_ch].reshape(n_frames, n_ch) if n_ch else np.zeros((n_frames, 0))
     bad = np.flatnonzero(~np.isfinite(data).all(axis=1))
     if bad.size:
         # np.fromstring reads "nan" and "inf"; a damaged file must not turn into NaN rotations
-        raise BvhError(f"MOTION frame {bad[0] + 1} holds a value that is not finite")
-    return _build_clip(joints, parents, offsets, channels, end_sites, frame_time, data)
+        raise BvhError(f"MOTION frame {bad[0] + 1} (line {first_line + lines[bad[0]]}) holds a value "
+                       "that is not finite")
+    return _build_clip(joints, parents, offsets, channels, end_sites, frame_time, data, source)
 
 
-def _build_clip(joints, parents, offsets, channels, end_sites, frame_time, data) -> BvhClip:
+def _build_clip(joints, parents, offsets, channels, end_sites, frame_time, data, source="") -> BvhClip:
     F, J = data.shape[0], len(joints)
     rotations = np.empty((F, J, 3, 3))
     rotations[:] = np.eye(3)
@@ -249,7 +304,8 @@ def _build_clip(joints, parents, offsets, channels, end_sites, frame_time, data)
         rotations[:, js] = r
     return BvhClip(joints=list(joints), parents=list(parents), offsets=offsets, channels=channels,
                    frame_time=float(frame_time), rotations=rotations, root_pos=translations[:, 0].copy(),
-                   end_sites=end_sites, translations=translations if any_child_pos else None)
+                   end_sites=end_sites, translations=translations if any_child_pos else None,
+                   source=str(source))
 
 
 def _rot_deg(axis, deg):
@@ -273,7 +329,7 @@ def read_bvh(path) -> BvhClip:
     with open(path, "r", encoding="utf-8", errors="replace", newline=None) as f:
         text = f.read()
     try:
-        return parse_bvh(text)
+        return parse_bvh(text, source=str(path))
     except BvhError as e:
         raise BvhError(f"{path}: {e}") from None
 

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
-from .cli import CommandError
+from .cli import CommandError, UsageError
 
 REPO = Path(__file__).resolve().parents[1]
 DATA_DIR = REPO / "training" / "data"
@@ -120,12 +120,42 @@ def _wait_first(procs):
 
 
 # ------------------------------------------------------------------------------ manifest
+MANIFEST_NEEDS = ("clip", "subject", "status")
+
+
 def read_manifest(path) -> list:
-    with open(path, newline="", encoding="utf-8") as f:
-        rows = list(csv.DictReader(f))
-    for r in rows:
-        r["subject"] = int(r["subject"])
-    return rows
+    """The rows of a manifest.csv (dicts, subject as int, missing cells ""). A manifest that cannot
+    be used is a UsageError naming it and the problem, with the line of the first bad row."""
+    rows = []
+    try:
+        # utf-8-sig: a spreadsheet's byte-order mark must not hide the first column's name
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            reader = csv.DictReader(f)
+            header = reader.fieldnames or []
+            for r in reader:
+                rows.append((reader.line_num, r))
+    except UnicodeDecodeError as e:
+        raise UsageError(f"{path}: not UTF-8 text (byte {e.start}: {e.reason})") from None
+    except csv.Error as e:
+        raise UsageError(f"{path}: not a readable CSV file ({e})") from None
+    missing = [c for c in MANIFEST_NEEDS if c not in header]
+    if missing:
+        raise UsageError(f"{path}: no {', '.join(missing)} column (its header: "
+                         f"{', '.join(str(h) for h in header) or 'none'})")
+    out = []
+    for line, r in rows:
+        r.pop(None, None)                       # cells beyond the header
+        for k, v in r.items():
+            if v is None:                       # a short row
+                r[k] = ""
+        if not r["clip"].strip():
+            raise UsageError(f"{path} line {line}: no clip name")
+        subject = r["subject"].strip()
+        if not re.fullmatch(r"[0-9]+", subject):
+            raise UsageError(f"{path} line {line}: subject {r['subject']!r} is not a subject number")
+        r["subject"] = int(subject)
+        out.append(r)
+    return out
 
 
 def clip_path(root, clip: str, subject: int) -> Path:

@@ -187,7 +187,10 @@ def load_torch_model(path, mirror: bool = False):
         raise UsageError(f"{path} is not a pose model checkpoint (it holds a {type(ckpt).__name__})")
     cfg = ckpt.get("config") or ckpt.get("model_config") or {}
     if isinstance(cfg, dict):
-        cfg = ModelConfig.from_dict(cfg)
+        try:
+            cfg = ModelConfig.from_dict(cfg)
+        except (ValueError, TypeError, AttributeError) as e:
+            raise UsageError(f"{path}: invalid network config ({e})") from e
     net = PoseNet(cfg)
     state = None
     for key in ("model", "state_dict", "model_state", "net"):
@@ -513,10 +516,13 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
     wrist: where the synthesised wrist sensors are ("hand": on the back of the hands, where the
     shipped model expects them; "forearm": wrist straps, skeleton.sensor_bones).
     noise: "realistic" sensor errors (what the targets are for) or "none" (perfect sensors)."""
+    from .cli import UsageError
+    for m in motions:
+        if m.num_frames == 0:
+            raise UsageError(f"motion {m.name}: no frames to evaluate")
     rng = np.random.default_rng(seed)
     clips = [synthesize_clip(m, rng, wrist, noise) for m in motions]
     if not clips:
-        from .cli import UsageError
         raise UsageError("no motions to evaluate")
     preds = {"baseline": [predict_baseline(c, wrist) for c in clips]}
     params = None
@@ -551,6 +557,7 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
             acc.add(c, p)
         accs[name] = acc
         results[name] = acc.summary()
+    _require_finite(results)
     if "PyTorch fp32" in preds and "ONNX fp32" in preds:
         diff = max(float(np.abs(a.local_rot - b.local_rot).max())
                    for a, b in zip(preds["PyTorch fp32"], preds["ONNX fp32"]))
@@ -570,6 +577,20 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
     write_plots(out_dir, results, accs, clips)
     return {"results": results, "latency": lat, "params": params, "report": report,
             "truth_jitter": tj}
+
+
+# Metrics every clip of at least one frame defines: NaN here is a broken model or input, and a
+# report must not show it as "-" (drift and jitter are NaN, "-", when clips are too short).
+FINITE_METRICS = ("angle_all", "angle_dip", "sip", "pos")
+
+
+def _require_finite(results) -> None:
+    from .cli import CommandError
+    for name, s in results.items():
+        bad = [k for k in FINITE_METRICS if not math.isfinite(s[k])]
+        if bad:
+            raise CommandError(f"the {name} results are not finite ({', '.join(bad)} = {s[bad[0]]}); "
+                               "no report written")
 
 
 def _shown_path(path) -> str:
@@ -597,9 +618,41 @@ def _trim(motions, max_clips, max_seconds):
         out = []
         for m in motions:
             n = int(max_seconds * m.fps)
+            if n < 1:
+                from .cli import UsageError
+                raise UsageError(f"--max-seconds {max_seconds:g} is shorter than one frame at {m.fps:g} Hz")
             out.append(sk.Motion(m.name, m.subject, m.fps, m.local_rot[:n], m.root_pos[:n], m.offsets))
         motions = out
     return motions
+
+
+def _count(text: str, least: int) -> int:
+    """argparse type: a whole number >= least (a bad value is a usage error, not a traceback)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < least:
+        raise argparse.ArgumentTypeError(f"{text} is less than {least}")
+    return value
+
+
+def _positive_count(text: str) -> int:
+    return _count(text, 1)
+
+
+def _seed(text: str) -> int:
+    return _count(text, 0)      # numpy's generators take no negative seeds
+
+
+def _positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive finite number of seconds")
+    return value
 
 
 def add_arguments(p):
@@ -615,9 +668,9 @@ def add_arguments(p):
     p.add_argument("--no-mirror", dest="no_mirror", action="store_true",
                    help="evaluate the checkpoint as a single network, not mirror-averaged as exported")
     p.add_argument("--out", default=str(RESULTS_DIR))
-    p.add_argument("--max-clips", type=int, default=0)
-    p.add_argument("--max-seconds", type=float, default=0.0, help="cut clips to this length")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-clips", type=_positive_count, default=0, help="evaluate the first N clips")
+    p.add_argument("--max-seconds", type=_positive_seconds, default=0.0, help="cut clips to this length")
+    p.add_argument("--seed", type=_seed, default=0)
     p.add_argument("--wrist-sensor", dest="wrist_sensor", default=None, choices=sk.WRIST_SENSOR_PLACES,
                    help="where the synthesised wrist sensors are: hand (back of the hands) or forearm "
                         "(wrist straps); default: where the checkpoint was trained to expect them "

@@ -27,7 +27,7 @@ import torch
 
 from . import skeleton as sk
 from .cli import CommandError, UsageError
-from .model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters
+from .model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters, non_finite_tensors
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
@@ -223,7 +223,13 @@ def check_failures(report: dict) -> list:
 def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True) -> dict:
     """Write out_dir/FP32_NAME and FP16_NAME: both as temporaries beside them, checked (check and
     ONNX Runtime available), then moved over the previous files. A failed check raises
-    ExportCheckError and leaves the previous files untouched."""
+    ExportCheckError and leaves the previous files untouched. Non-finite weights are refused
+    before anything is written: unlike the ONNX Runtime check, this one always runs (--no-check,
+    or no ONNX Runtime, would otherwise install a model that outputs NaN)."""
+    bad = non_finite_tensors(net.state_dict())
+    if bad:
+        raise ExportCheckError(f"the network's weights hold NaN or inf ({', '.join(bad[:3])}"
+                               f"{', ...' if len(bad) > 3 else ''}); nothing written")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     p32, p16 = out_dir / FP32_NAME, out_dir / FP16_NAME

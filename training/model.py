@@ -26,6 +26,7 @@ Only export-friendly ops are used (matmul, slicing, elementwise, LSTM, no atan2)
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, asdict, replace
 
 import torch
@@ -81,6 +82,15 @@ class ModelConfig:
         d.setdefault("wrist_anchor", "hand")
         if d["wrist_anchor"] not in ANCHOR_JOINTS:
             raise ValueError(f"wrist_anchor {d['wrist_anchor']!r}: expected one of {sorted(ANCHOR_JOINTS)}")
+        # A damaged or hand-edited config would otherwise fail deep inside torch (e.g. nn.LSTM
+        # with hidden -5), far from the file that holds it.
+        for k in ("embed", "hidden", "layers", "head"):
+            v = d.get(k, known[k].default)
+            if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < 1:
+                raise ValueError(f"{k} {v!r}: expected a positive integer")
+        dropout = d.get("dropout", 0.0)
+        if isinstance(dropout, bool) or not isinstance(dropout, numbers.Real) or not 0.0 <= dropout < 1.0:
+            raise ValueError(f"dropout {dropout!r}: expected a number in [0, 1)")
         return cls(**d)
 
 
@@ -354,3 +364,10 @@ class ExportWrapper(nn.Module):
 
 def count_parameters(net: nn.Module) -> int:
     return sum(p.numel() for p in net.parameters())
+
+
+def non_finite_tensors(state: dict) -> list:
+    """Names of the floating-point tensors of a state dict that hold NaN or inf: weights that
+    make every output NaN, whatever the input."""
+    return [k for k, v in state.items()
+            if torch.is_tensor(v) and v.is_floating_point() and not bool(torch.isfinite(v).all())]

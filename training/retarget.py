@@ -24,6 +24,10 @@ Method (per clip)
 5. Resampled from the file's Frame Time to 60 Hz: slerp of local rotations, lerp of the root.
 Elbow-reversed clips are repaired on request by inverting (transposing) the source elbow's local
 rotation before step 1 (README of the CMU data: this restores the original forearm direction).
+
+A clip this cannot use (no frames, unknown skeleton, a missing hip or foot joint, a zero-length
+bone, units that cannot be inferred, a root kilometres away) is a RetargetError (a BvhError) naming
+the clip's file (BvhClip.source), never NaN motion.
 """
 from __future__ import annotations
 
@@ -32,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import skeleton as sk
-from .bvh import BvhClip
+from .bvh import MAX_FRAME_TIME, BvhClip, BvhError
 
 END = "@end"  # direction target: the joint's End Site
 
@@ -84,6 +88,17 @@ SMPL_HIPS = ("left_hip", "right_hip")
 SMPL_FEET = ("left_ankle", "right_ankle")
 
 CMU_ASF_UNIT_M = 0.0254 / 0.45   # original cgspeed CMU BVH: ASF length unit 1/0.45 inch
+# No capture volume is kilometres wide: a root that far from the origin is a damaged value (one
+# frame's Xposition 1e300 became inf in float32 and NaN in the network).
+MAX_ROOT_DISTANCE_M = 1000.0
+
+
+class RetargetError(BvhError):
+    """A BVH clip that cannot be mapped onto our skeleton (a message, not a bug)."""
+
+
+def _refused(clip: BvhClip, problem: str) -> RetargetError:
+    return RetargetError(f"{clip.source}: {problem}" if clip.source else problem)
 
 
 @dataclass
@@ -110,7 +125,7 @@ def detect_source(joints) -> SourceSkeleton:
         return SOURCES["cgspeed"]
     if set(sk.JOINT_NAMES) <= names:
         return SOURCES["smpl"]
-    raise ValueError("unknown source skeleton (expected CMU Daz-friendly, cgspeed CMU or SMPL-24 names): "
+    raise RetargetError("unknown source skeleton (expected CMU Daz-friendly, cgspeed CMU or SMPL-24 names): "
                      + ", ".join(list(joints)[:8]) + " ...")
 
 
@@ -131,7 +146,7 @@ def _subtree_end_points(clip: BvhClip, rest: np.ndarray, root_j: int):
 def _rest_dir(clip: BvhClip, rest: np.ndarray, j: int, target):
     if target == END:
         if j not in clip.end_sites:
-            raise ValueError(f"{clip.joints[j]} has no End Site")
+            raise _refused(clip, f"{clip.joints[j]} has no End Site (its bone direction is needed)")
         return clip.end_sites[j]
     return rest[clip.index(target)] - rest[j]
 
@@ -153,7 +168,8 @@ def unit_scale(leg_height_units: float) -> float:
         return CMU_ASF_UNIT_M
     if 0.4 <= h <= 1.5:
         return 1.0
-    raise ValueError(f"cannot infer units from a leg height of {h:.3f} file units")
+    raise RetargetError(f"cannot infer units from a leg height of {h:.3f} file units (hip joints above "
+                        "the lowest foot point at rest: 40-150 cm, 8-30 CMU ASF units or 0.4-1.5 m)")
 
 
 @dataclass
@@ -166,7 +182,22 @@ class _Plan:
 
 
 def _plan(clip: BvhClip, units=None) -> _Plan:
-    src = detect_source(clip.joints)
+    try:
+        src = detect_source(clip.joints)
+    except RetargetError as e:
+        raise _refused(clip, str(e)) from None
+    # the root, hip and foot joints place and scale our skeleton: no fallback for them
+    missing = [n for n in (src.mapping[0][1],) + src.hips + src.feet if n not in clip.joints]
+    if missing:
+        raise _refused(clip, f"the {src.kind} skeleton lacks {', '.join(missing)} (root, hip and foot "
+                             "joints are needed for retargeting)")
+    leg = source_leg_height(clip, src)
+    try:
+        unit = unit_scale(leg) if units is None else float(units)
+    except RetargetError as e:
+        raise _refused(clip, str(e)) from None
+    if not leg > 0:
+        raise _refused(clip, f"the hip joints are not above the feet at rest (leg height {leg:.3f})")
     rest = clip.rest_positions()
     modes = []
     for j in range(sk.NUM_JOINTS):
@@ -179,10 +210,13 @@ def _plan(clip: BvhClip, units=None) -> _Plan:
         Q = np.eye(3)
         if mode == "align":
             ours = _our_child_dir(j)
-            Q = sk.rotation_between(ours, _rest_dir(clip, rest, si, target))
+            bone = _rest_dir(clip, rest, si, target)
+            # a zero-length bone has no direction: the alignment would be NaN in every frame
+            if not np.linalg.norm(bone) > 1e-6 * leg:
+                raise _refused(clip, f"the bone {name} -> {'End Site' if target == END else target} has "
+                                     "zero length (OFFSET 0 0 0); its direction cannot be retargeted")
+            Q = sk.rotation_between(ours, bone)
         modes.append((mode, si, Q))
-    leg = source_leg_height(clip, src)
-    unit = unit_scale(leg) if units is None else float(units)
     scale = leg * unit / sk.leg_height(sk.DEFAULT_OFFSETS)
     return _Plan(src, modes, unit, scale, tuple(clip.index(n) for n in src.hips))
 
@@ -210,6 +244,7 @@ def sole_points(global_rot, positions, offsets):
 
 def retarget_frames(clip: BvhClip, elbow_reversed: str = "", units=None, floor: bool = True):
     """Source-rate retarget: (local_rot (F,24,3,3) float64, root_pos (F,3) metres, offsets (24,3))."""
+    _check_source(clip)
     plan = _plan(clip, units)
     rots = clip.rotations
     if elbow_reversed:
@@ -219,9 +254,9 @@ def retarget_frames(clip: BvhClip, elbow_reversed: str = "", units=None, floor: 
                 e = clip.index(plan.src.elbows[side])
                 rots[:, e] = np.swapaxes(rots[:, e], -1, -2)
             elif side.strip():
-                raise ValueError(f"bad elbow_reversed value {elbow_reversed!r}")
+                raise _refused(clip, f"bad elbow_reversed value {elbow_reversed!r} (L, R or LR)")
     src_clip = BvhClip(clip.joints, clip.parents, clip.offsets, clip.channels, clip.frame_time, rots,
-                       clip.root_pos, clip.end_sites, clip.translations)
+                       clip.root_pos, clip.end_sites, clip.translations, clip.source)
     g_src, p_src = src_clip.global_transforms()
     F = clip.num_frames
     g = np.empty((F, sk.NUM_JOINTS, 3, 3))
@@ -238,6 +273,11 @@ def retarget_frames(clip: BvhClip, elbow_reversed: str = "", units=None, floor: 
     local = sk.global_to_local(g)
     offsets = sk.DEFAULT_OFFSETS * plan.scale
     hip_mid_src = 0.5 * (p_src[:, plan.hip_idx[0]] + p_src[:, plan.hip_idx[1]]) * plan.unit
+    reach = np.abs(hip_mid_src).max(axis=-1)           # not the norm: 1e300 squared overflows
+    far = np.flatnonzero(~(reach <= MAX_ROOT_DISTANCE_M))
+    if far.size:
+        raise _refused(clip, f"frame {far[0] + 1}: the hips are {reach[far[0]]:.3g} m from the origin "
+                             f"(more than {MAX_ROOT_DISTANCE_M:g} m: a damaged value)")
     hip_mid_ours = 0.5 * (offsets[1] + offsets[2])
     root = hip_mid_src - g[:, 0] @ hip_mid_ours
     if floor and F:
@@ -246,9 +286,26 @@ def retarget_frames(clip: BvhClip, elbow_reversed: str = "", units=None, floor: 
     return local, root, offsets
 
 
+def _check_source(clip: BvhClip) -> None:
+    """What retargeting needs of any clip, whoever built it (bvh.parse_bvh checks its own)."""
+    if clip.num_frames == 0:
+        raise _refused(clip, "the clip has no frames (Frames: 0)")
+    if not 0 < clip.frame_time <= MAX_FRAME_TIME:
+        raise _refused(clip, f"Frame Time {clip.frame_time} s is not a plausible frame time "
+                             f"(0 to {MAX_FRAME_TIME:g} s)")
+    for what, v in (("rotations", clip.rotations), ("root positions", clip.root_pos),
+                    ("OFFSETs", clip.offsets), ("End Site OFFSETs", list(clip.end_sites.values())),
+                    ("joint positions", clip.translations)):
+        if v is not None and not np.isfinite(np.asarray(v, dtype=np.float64)).all():
+            raise _refused(clip, f"the clip's {what} are not all finite")
+
+
 def resample(local_rot, root_pos, src_dt: float, fps: float = sk.MODEL_FPS):
     """Resample (F,J,3,3) rotations (slerp) and (F,3) positions (lerp) from frame time src_dt to
     fps. The output covers the same duration: frames at n/fps for n/fps <= (F-1) src_dt."""
+    if not 0 < src_dt <= MAX_FRAME_TIME:
+        # the output has src_dt * fps frames per input frame: a huge src_dt exhausts the memory
+        raise ValueError(f"resample: frame time {src_dt} s is outside (0, {MAX_FRAME_TIME:g}] s")
     F = local_rot.shape[0]
     if F < 2:
         return local_rot.copy(), root_pos.copy()
@@ -270,8 +327,13 @@ def to_smpl_motion(clip: BvhClip, name: str = "", subject: int = 0, elbow_revers
     local, root, offsets = retarget_frames(clip, elbow_reversed, units, floor)
     if abs(clip.frame_time * fps - 1.0) > 1e-6:
         local, root = resample(local, root, clip.frame_time, fps)
-    return sk.Motion(name=name, subject=int(subject), fps=float(fps), local_rot=local.astype(np.float32),
-                     root_pos=root.astype(np.float32), offsets=offsets.astype(np.float32))
+    m = sk.Motion(name=name, subject=int(subject), fps=float(fps), local_rot=local.astype(np.float32),
+                  root_pos=root.astype(np.float32), offsets=offsets.astype(np.float32))
+    # the checks above should leave nothing non-finite; training and evaluation must never see it
+    for what, v in (("joint rotations", m.local_rot), ("root positions", m.root_pos), ("offsets", m.offsets)):
+        if not np.isfinite(v).all():
+            raise _refused(clip, f"the retargeted {what} are not finite")
+    return m
 
 
 # --------------------------------------------------------------------------- the other way

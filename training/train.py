@@ -34,6 +34,8 @@ training/results/loss.png.
 """
 from __future__ import annotations
 
+import argparse
+import io
 import json
 import math
 import os
@@ -46,8 +48,8 @@ import torch
 import torch.nn.functional as F
 
 from . import skeleton as sk
-from .cli import UsageError
-from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch
+from .cli import CommandError, UsageError
+from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch, non_finite_tensors
 from .synthesis import Augmentation, synthesize, vary_motion
 
 REPO = Path(__file__).resolve().parents[1]
@@ -249,6 +251,16 @@ def holdout_validation(motions, share: float = VAL_SHARE) -> tuple:
                         f"file names carry no subject numbers)")
 
 
+def check_finite_motions(motions, what: str) -> None:
+    """A UsageError naming the first clip with NaN or inf values: one such clip makes the loss,
+    and after one step every weight, NaN."""
+    for m in motions:
+        for field_name in ("local_rot", "root_pos", "offsets"):
+            if not np.isfinite(getattr(m, field_name)).all():
+                raise UsageError(f"{what} clip {m.name}: its {field_name} holds NaN or inf values "
+                                 f"(a damaged source file?); remove or repair it")
+
+
 def validation_set(motions, cfg: TrainConfig) -> list:
     """Deterministic: evenly spaced clips, no augmentation, at most val_max_frames each."""
     if len(motions) > cfg.val_clips:
@@ -356,13 +368,27 @@ def save_weights(src, dst) -> None:
 
 def atomic_torch_save(obj, path) -> None:
     """torch.save to a temporary file beside `path`, then os.replace: an interrupted or failed
-    write (disk full, Ctrl-C) leaves the previous file, never a truncated one."""
+    write (disk full, Ctrl-C) leaves the previous file, never a truncated one. A failed write is a
+    CommandError naming `path`.
+
+    torch.save serialises into memory and Python writes the file: torch's own file writer, on a
+    full disk, raises and then aborts the whole process (C++ terminate in its destructor, exit
+    134) before any handler runs. A checkpoint is tens of MB, so the copy in memory is cheap."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    buffer = io.BytesIO()
+    torch.save(obj, buffer)
     try:
-        torch.save(obj, str(tmp))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(buffer.getbuffer())
+            f.flush()
+            os.fsync(f.fileno())   # a full disk can show only here (delayed allocation)
         os.replace(tmp, path)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        kept = "the previous file is kept" if path.exists() else "nothing written"
+        raise CommandError(f"{path}: cannot write the checkpoint ({e.strerror or e}); {kept}") from e
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -388,15 +414,32 @@ def checkpoint_network(ck, path, device="cpu") -> PoseNet:
     naming the file."""
     if not isinstance(ck, dict) or not isinstance(ck.get("model"), dict) or not isinstance(ck.get("config"), dict):
         raise UsageError(f"{path} is not a pose model checkpoint (no 'model' weights and 'config')")
-    net = PoseNet(ModelConfig.from_dict(ck["config"])).to(device)
+    net = PoseNet(checkpoint_model_config(ck, path)).to(device)
     try:
         net.load_state_dict(ck["model"])
     except RuntimeError as e:
         raise UsageError(f"{path}: the weights do not fit its network config ({str(e).splitlines()[0]})") from e
+    bad = non_finite_tensors(net.state_dict())
+    if bad:
+        raise UsageError(f"{path}: the weights hold NaN or inf ({', '.join(bad[:3])}"
+                         f"{', ...' if len(bad) > 3 else ''}); the network would output NaN")
     return net
 
 
+def checkpoint_model_config(ck, path) -> ModelConfig:
+    """The ModelConfig of a loaded checkpoint, or a UsageError naming the file."""
+    try:
+        return ModelConfig.from_dict(ck["config"])
+    except (ValueError, TypeError, AttributeError) as e:
+        raise UsageError(f"{path}: invalid network config ({e})") from e
+
+
 def _save(path: Path, net, opt, step, total, cfg, history, best, rng, batcher, state) -> None:
+    # The last line of defence: a NaN checkpoint would replace a good one and be exported.
+    bad = non_finite_tensors(net.state_dict())
+    if bad:
+        raise CommandError(f"step {step}: the weights hold NaN or inf ({', '.join(bad[:3])}); {path} "
+                           f"not written (a learning rate that is too high?)")
     # The batcher's streams and the LSTM state they carry make a resumed run continue exactly
     # where this one stands (same batches, same recurrent state), not from fresh clips.
     atomic_torch_save({"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
@@ -449,6 +492,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         check_resume_config(cfg, ck, last)
     if motions is None:
         motions, val_motions = load_data(cfg)
+    check_finite_motions(motions, "training")
+    check_finite_motions(val_motions or [], "validation")
     step, total, history, best = 0, cfg.steps, {"train": [], "val": []}, None
     if ck is not None:
         # The network exactly as saved: its anchoring, wrist placement and dropout are the run's
@@ -503,71 +548,91 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         from tqdm import tqdm
         pbar = tqdm(total=total, initial=step, desc="train", unit="step", dynamic_ncols=True)
     net.train()
-    while True:
-        if total is not None and step >= total:
-            break
-        if cfg.stop_after is not None and step >= cfg.stop_after:
-            print(f"train: stopped after step {step} (--stop-after); --resume continues the run")
-            break
-        if time.time() - t_start > budget_s:
-            print("train: budget reached")
-            break
-        t0 = time.time()
-        batch, reset = batcher.next()
-        batch = {k: v.to(device) for k, v in batch.items()}
-        keep = (~reset).to(device).float()[None, :, None]
-        h, c = state[0] * keep, state[1] * keep
-        for g in opt.param_groups:
-            g["lr"] = _lr(step, total or 10 ** 9, cfg, (time.time() - t_start) / budget_s)
-        rot, vel, logits, (h, c) = net.forward_raw(batch["imu_orientation"], batch["imu_acceleration"], (h, c))
-        state = (h.detach(), c.detach())
-        losses = compute_losses((rot, vel, logits), batch, cfg)
-        opt.zero_grad(set_to_none=True)
-        losses["loss"].backward()
-        torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
-        opt.step()
-        step += 1
-        step_times.append(time.time() - t0)
-        for k, v in losses.items():
-            acc[k] = acc.get(k, 0.0) + float(v)
-        acc_n += 1
-        if total is None and step == 20:
-            # fix the schedule length from the measured speed (excluding the first steps)
-            per = float(np.median(step_times[5:]))
-            total = max(cfg.warmup + 1, int((budget_s - (time.time() - t_start)) / (per * 1.04)) + step)
-            print(f"train: {per * 1000:.0f} ms/step -> schedule of {total} steps "
-                  f"({total / steps_per_epoch:.1f} epochs)")
+    # A stopped run (non-finite loss, full disk) closes its progress bar first, so the error
+    # line that follows stands on a line of its own.
+    try:
+        while True:
+            if total is not None and step >= total:
+                break
+            if cfg.stop_after is not None and step >= cfg.stop_after:
+                print(f"train: stopped after step {step} (--stop-after); --resume continues the run")
+                break
+            if time.time() - t_start > budget_s:
+                print("train: budget reached")
+                break
+            t0 = time.time()
+            batch, reset = batcher.next()
+            batch = {k: v.to(device) for k, v in batch.items()}
+            keep = (~reset).to(device).float()[None, :, None]
+            h, c = state[0] * keep, state[1] * keep
+            for g in opt.param_groups:
+                g["lr"] = _lr(step, total or 10 ** 9, cfg, (time.time() - t_start) / budget_s)
+            rot, vel, logits, (h, c) = net.forward_raw(batch["imu_orientation"], batch["imu_acceleration"], (h, c))
+            state = (h.detach(), c.detach())
+            losses = compute_losses((rot, vel, logits), batch, cfg)
+            # Stop before a non-finite loss or gradient reaches the weights: one such step makes every
+            # weight NaN, and the run would go on to save and select NaN checkpoints.
+            if not math.isfinite(float(losses["loss"])):
+                parts = ", ".join(f"{k} {float(v):.4g}" for k, v in losses.items() if k != "loss")
+                cause = ("the weights became NaN or inf in the previous step (a learning rate that is too "
+                         "high?)" if non_finite_tensors(net.state_dict()) else "likely a loss weight such as "
+                         "--pos-weight that is not finite, or non-finite synthesised inputs")
+                raise CommandError(f"step {step + 1}: the training loss is {float(losses['loss'])} ({parts}); "
+                                   f"stopped, no checkpoint written at this step: {cause}")
+            opt.zero_grad(set_to_none=True)
+            losses["loss"].backward()
+            grad_norm = float(torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0))
+            if not math.isfinite(grad_norm):
+                raise CommandError(f"step {step + 1}: the gradient norm is {grad_norm} (loss "
+                                   f"{float(losses['loss']):.4g}); stopped before the weights changed "
+                                   f"(likely extreme values in a training clip, or a learning rate that is too high)")
+            opt.step()
+            step += 1
+            step_times.append(time.time() - t0)
+            for k, v in losses.items():
+                acc[k] = acc.get(k, 0.0) + float(v)
+            acc_n += 1
+            if total is None and step == 20:
+                # fix the schedule length from the measured speed (excluding the first steps)
+                per = float(np.median(step_times[5:]))
+                total = max(cfg.warmup + 1, int((budget_s - (time.time() - t_start)) / (per * 1.04)) + step)
+                print(f"train: {per * 1000:.0f} ms/step -> schedule of {total} steps "
+                      f"({total / steps_per_epoch:.1f} epochs)")
+                if pbar is not None:
+                    pbar.total = total
+                    pbar.refresh()
             if pbar is not None:
-                pbar.total = total
-                pbar.refresh()
+                pbar.update(1)
+                pbar.set_postfix(loss=f"{float(losses['loss']):.3f}")
+            if acc_n >= 50 or (total is not None and step >= total):
+                rec = {k: v / acc_n for k, v in acc.items()}
+                rec.update(step=step, epoch=step / steps_per_epoch, lr=opt.param_groups[0]["lr"],
+                           s_per_step=(time.time() - t_log) / acc_n, elapsed_s=time.time() - t_start)
+                history["train"].append(rec)
+                acc, acc_n, t_log = {}, 0, time.time()
+            now = time.time()
+            done = ((total is not None and step >= total) or now - t_start > budget_s
+                    or (cfg.stop_after is not None and step >= cfg.stop_after))
+            if val and (now - last_eval > cfg.eval_every_s or done):
+                vr = validate(net, val, cfg, device)
+                vr["step"] = step
+                if not math.isfinite(vr["val_loss"]):
+                    raise CommandError(f"step {step}: the validation loss is {vr['val_loss']} with finite "
+                                       f"weights (non-finite synthesised validation inputs?); best.pt not written")
+                history["val"].append(vr)
+                last_eval = time.time()
+                msg = f"val step {step}: loss {vr['val_loss']:.4f} angle {vr['val_angle_err_deg']:.2f} deg " \
+                      f"pos {vr['val_pos_err_cm']:.2f} cm contact {vr['val_contact_acc']:.3f}"
+                (pbar.write if pbar is not None else print)(msg)
+                if best is None or vr["val_loss"] < best["val_loss"]:
+                    best = dict(vr)
+                    _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
+            if now - last_ckpt > cfg.ckpt_every_s:
+                _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
+                last_ckpt = time.time()
+    finally:
         if pbar is not None:
-            pbar.update(1)
-            pbar.set_postfix(loss=f"{float(losses['loss']):.3f}")
-        if acc_n >= 50 or (total is not None and step >= total):
-            rec = {k: v / acc_n for k, v in acc.items()}
-            rec.update(step=step, epoch=step / steps_per_epoch, lr=opt.param_groups[0]["lr"],
-                       s_per_step=(time.time() - t_log) / acc_n, elapsed_s=time.time() - t_start)
-            history["train"].append(rec)
-            acc, acc_n, t_log = {}, 0, time.time()
-        now = time.time()
-        done = ((total is not None and step >= total) or now - t_start > budget_s
-                or (cfg.stop_after is not None and step >= cfg.stop_after))
-        if val and (now - last_eval > cfg.eval_every_s or done):
-            vr = validate(net, val, cfg, device)
-            vr["step"] = step
-            history["val"].append(vr)
-            last_eval = time.time()
-            msg = f"val step {step}: loss {vr['val_loss']:.4f} angle {vr['val_angle_err_deg']:.2f} deg " \
-                  f"pos {vr['val_pos_err_cm']:.2f} cm contact {vr['val_contact_acc']:.3f}"
-            (pbar.write if pbar is not None else print)(msg)
-            if best is None or vr["val_loss"] < best["val_loss"]:
-                best = dict(vr)
-                _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
-        if now - last_ckpt > cfg.ckpt_every_s:
-            _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
-            last_ckpt = time.time()
-    if pbar is not None:
-        pbar.close()
+            pbar.close()
     _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
     if not val:
         _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
@@ -606,13 +671,13 @@ def _size_dims(cfg: ModelConfig) -> tuple:
     return cfg.embed, cfg.hidden, cfg.layers, cfg.head
 
 
-def saved_train_config(ck) -> TrainConfig:
+def saved_train_config(ck, path="the checkpoint") -> TrainConfig:
     """The options a checkpoint was trained with: its train_config (unknown keys dropped, keys
     older checkpoints lack at their defaults), with size, anchoring and wrist placement read from
     the network's own config."""
     known = TrainConfig.__dataclass_fields__
     cfg = TrainConfig(**{k: v for k, v in (ck.get("train_config") or {}).items() if k in known})
-    mc = ModelConfig.from_dict(ck["config"])
+    mc = checkpoint_model_config(ck, path)
     cfg.anchored, cfg.wrist_sensor = bool(mc.anchored), mc.wrist_anchor
     cfg.size = next((n for n, c in SIZES.items() if _size_dims(c) == _size_dims(mc)), cfg.size)
     return cfg
@@ -646,7 +711,7 @@ def check_resume_config(cfg: TrainConfig, ck, path) -> None:
     """A UsageError when cfg asks for anything the checkpoint's run did not (outside
     RESUME_OVERRIDES): another network, other anchoring or wrist placement, other training
     options or data."""
-    saved = saved_train_config(ck)
+    saved = saved_train_config(ck, path)
     for key in TrainConfig.__dataclass_fields__:
         if key not in RESUME_OVERRIDES and not _same(key, getattr(cfg, key), getattr(saved, key)):
             raise UsageError(_contradiction(key, getattr(cfg, key), getattr(saved, key), path))
@@ -659,7 +724,7 @@ def resume_config(cfg: TrainConfig, explicit) -> TrainConfig:
     last = Path(cfg.ckpt_dir) / "last.pt"
     if not last.is_file():
         raise UsageError(_nothing_to_resume(cfg.ckpt_dir))
-    saved = saved_train_config(load_checkpoint_file(last))
+    saved = saved_train_config(load_checkpoint_file(last), last)
     # stop_after belongs to one sitting: the saved one would stop the resumed run at once.
     out = replace(saved, resume=True, ckpt_dir=cfg.ckpt_dir, progress=cfg.progress, stop_after=None)
     for key in sorted(explicit):
@@ -695,6 +760,13 @@ def config_from_args(args) -> TrainConfig:
         cfg.val_source = args.val_bvh
         explicit.add("val_source")
     if cfg.smoke:
+        # --smoke trains on procedural motions: a data option would be ignored, while the log
+        # recorded it as the run's data.
+        given = [o for o, a in (("--bvh", "bvh"), ("--val-bvh", "val_bvh"), ("--max-clips", "max_clips"))
+                 if getattr(args, a, None) is not None]
+        if given:
+            raise UsageError(f"--smoke trains on procedural motions and cannot be combined with "
+                             f"{' '.join(given)} (for a short run on a folder: --size tiny --steps 30)")
         if getattr(args, "size", None) is None:
             cfg.size = "tiny"
         cfg.batch, cfg.window = min(cfg.batch, 4), min(cfg.window, 60)
@@ -716,11 +788,33 @@ def main(args) -> int:
     return 0
 
 
+def _number(convert, accepts, expected: str):
+    """An argparse type: the value converted, or ArgumentTypeError (exit 2 with the usage) when it
+    does not parse or is out of range; NaN and inf are never accepted."""
+    def parse(text):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {expected}") from None
+        if (isinstance(value, float) and not math.isfinite(value)) or not accepts(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is not {expected}")
+        return value
+    return parse
+
+
+POSITIVE_INT = _number(int, lambda v: v >= 1, "a positive integer")
+NON_NEGATIVE_INT = _number(int, lambda v: v >= 0, "an integer >= 0")
+POSITIVE = _number(float, lambda v: v > 0, "a positive number")
+NON_NEGATIVE = _number(float, lambda v: v >= 0, "a number >= 0")
+PROBABILITY = _number(float, lambda v: 0 <= v <= 1, "a probability in [0, 1]")
+DROPOUT = _number(float, lambda v: 0 <= v < 1, "a dropout rate in [0, 1)")
+
+
 def add_arguments(parser) -> None:
-    parser.add_argument("--budget-minutes", dest="budget_minutes", type=float, default=None,
+    parser.add_argument("--budget-minutes", dest="budget_minutes", type=POSITIVE, default=None,
                         help="wall-clock budget (default 60)")
-    parser.add_argument("--steps", type=int, default=None, help="total steps (default: from budget)")
-    parser.add_argument("--stop-after", dest="stop_after", type=int, default=None,
+    parser.add_argument("--steps", type=POSITIVE_INT, default=None, help="total steps (default: from budget)")
+    parser.add_argument("--stop-after", dest="stop_after", type=POSITIVE_INT, default=None,
                         help="stop after this step of the schedule, with a checkpoint; --resume "
                              "continues exactly where it stopped (a run split over sittings)")
     parser.add_argument("--resume", action="store_true",
@@ -732,31 +826,32 @@ def add_arguments(parser) -> None:
     parser.add_argument("--device", default=None, choices=["auto", "cpu", "cuda"])
     parser.add_argument("--smoke", action="store_true", help="tiny procedural run (seconds)")
     parser.add_argument("--size", default=None, choices=sorted(SIZES), help="model size (default medium)")
-    parser.add_argument("--batch", type=int, default=None)
-    parser.add_argument("--window", type=int, default=None, help="frames per step (default 120)")
-    parser.add_argument("--lr", type=float, default=None)
-    parser.add_argument("--seed", type=int, default=None)
-    parser.add_argument("--dropout", type=float, default=None, help="dropout in training (default 0.1)")
+    parser.add_argument("--batch", type=POSITIVE_INT, default=None, help="streams per step (default 32)")
+    parser.add_argument("--window", type=POSITIVE_INT, default=None, help="frames per step (default 120)")
+    parser.add_argument("--lr", type=POSITIVE, default=None)
+    parser.add_argument("--seed", type=NON_NEGATIVE_INT, default=None)
+    parser.add_argument("--dropout", type=DROPOUT, default=None, help="dropout in training (default 0.1)")
     parser.add_argument("--no-anchor", dest="no_anchor", action="store_true",
                         help="predict the sensor bones like every other joint (runs 1-2)")
     parser.add_argument("--rot-loss", dest="rot_loss", default=None, choices=["chordal", "squared"],
                         help="rotation loss (default chordal)")
-    parser.add_argument("--arm-swap", dest="arm_swap", type=float, default=None,
+    parser.add_argument("--arm-swap", dest="arm_swap", type=PROBABILITY, default=None,
                         help="probability that a clip's arms move as in another clip (default 0)")
-    parser.add_argument("--arm-jitter", dest="arm_jitter_deg", type=float, default=None,
+    parser.add_argument("--arm-jitter", dest="arm_jitter_deg", type=NON_NEGATIVE, default=None,
                         help="slow random shoulder offsets, per-axis sigma in degrees (default 0)")
     parser.add_argument("--wrist-sensor", dest="wrist_sensor", default=None, choices=["hand", "forearm"],
                         help="where the synthesised wrist sensors are: hand (back of the hands, the "
                              "default and the shipped model's) or forearm (wrist straps; a hand-trained "
                              "--init-from is switched over)")
-    parser.add_argument("--pos-weight", dest="w_pos", type=float, default=None,
+    parser.add_argument("--pos-weight", dest="w_pos", type=NON_NEGATIVE, default=None,
                         help="weight of the joint-position loss (metres) against the rotation "
                              "loss (default 10)")
     parser.add_argument("--ckpt-dir", dest="ckpt_dir", default=None,
                         help="checkpoint folder (default training/data/checkpoints)")
     parser.add_argument("--results-dir", dest="results_dir", default=None,
                         help="loss curve and log folder (default training/results)")
-    parser.add_argument("--max-clips", dest="max_clips", type=int, default=None)
+    parser.add_argument("--max-clips", dest="max_clips", type=POSITIVE_INT, default=None,
+                        help="train on N of the training clips, drawn with --seed (quick runs)")
     parser.add_argument("--bvh", default=None, help="train on a BVH folder instead of the CMU split "
                         "(without --val-bvh, about 10 %% of its clips are held out for validation: "
                         "by subject where the names carry CMU subject numbers, else by clip)")

@@ -64,17 +64,38 @@ def test_average_ignores_the_training_only_dropout(tmp_path):
 
 
 def test_average_writes_its_output_atomically(tmp_path, monkeypatch):
-    from pathlib import Path
+    import os
+    from training.cli import CommandError
     _checkpoint(tmp_path / "a.pt", seed=1)
     _checkpoint(tmp_path / "b.pt", seed=2)
     out = tmp_path / "out" / "soup.pt"
     average.average_checkpoints([tmp_path / "a.pt", tmp_path / "b.pt"], out)
     before = out.read_bytes()
 
-    def disk_full(obj, f, *a, **k):
-        Path(f).write_bytes(b"partial")
+    def disk_full(fd):   # the temporary is written, then the disk turns out to be full
         raise OSError(28, "No space left on device")
-    monkeypatch.setattr(torch, "save", disk_full)
-    with pytest.raises(OSError):
+    monkeypatch.setattr(os, "fsync", disk_full)
+    with pytest.raises(CommandError, match=f"{out}: cannot write the checkpoint .No space left on device.; "
+                                           f"the previous file is kept"):
         average.average_checkpoints([tmp_path / "b.pt", tmp_path / "a.pt"], out)
     assert out.read_bytes() == before and [p.name for p in out.parent.iterdir()] == ["soup.pt"]
+
+
+def test_average_refuses_non_finite_weights_inputs_and_an_input_as_output(tmp_path):
+    from training.cli import UsageError
+    a = _checkpoint(tmp_path / "a.pt", seed=1)
+    _checkpoint(tmp_path / "b.pt", seed=2)
+    state = a.state_dict()
+    state["lstm.weight_hh_l0"][3, 4] = float("inf")
+    torch.save({"model": state, "config": a.config.to_dict()}, str(tmp_path / "inf.pt"))
+    pair = [tmp_path / "a.pt", tmp_path / "b.pt"]
+    with pytest.raises(UsageError, match=f"{tmp_path / 'inf.pt'}: the weights hold NaN or inf .lstm.weight_hh_l0"):
+        average.average_checkpoints([tmp_path / "a.pt", tmp_path / "inf.pt"], tmp_path / "soup.pt")
+    for bad in ([float("inf"), 1], [float("nan"), 1], [-1, 2], [0, 0]):
+        with pytest.raises(UsageError, match="weights must be finite and >= 0 with a positive sum"):
+            average.average_checkpoints(pair, tmp_path / "soup.pt", weights=bad)
+    assert not (tmp_path / "soup.pt").exists()
+    before = (tmp_path / "a.pt").read_bytes()
+    with pytest.raises(UsageError, match="--out .*a.pt is one of the checkpoints to average"):
+        average.average_checkpoints(pair, tmp_path / "." / "a.pt")
+    assert (tmp_path / "a.pt").read_bytes() == before

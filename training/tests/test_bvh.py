@@ -163,3 +163,48 @@ def test_damaged_files_are_refused_or_read_into_finite_clips():
             assert np.isfinite(clip.rotations).all() and np.isfinite(clip.root_pos).all(), what
             assert np.isfinite(clip.offsets).all(), what
     assert refused > 0
+
+
+def _daz_text(seconds=1.0):
+    return bvh.format_bvh(motion_to_daz(make_motion("walk", seconds, seed=2)), order="ZXY", decimals=4)
+
+
+def _edit_motion_lines(text, edit):
+    lines = text.split("\n")
+    first = lines.index("MOTION") + 3
+    lines[first:] = [edit(line) if line.strip() else line for line in lines[first:]]
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize("edit, held", [(lambda line: " ".join(line.split()[:-3]), "63"),
+                                        (lambda line: line + " 0 0 0", "69")])
+def test_motion_lines_must_hold_one_value_per_channel(tmp_path, edit, held):
+    """Read as one flat array, 3 values missing or extra per line shift every later frame onto
+    the wrong channels: refused with the file and line, not read misaligned."""
+    text = _daz_text()
+    first_data_line = text.split("\n").index("MOTION") + 4
+    path = tmp_path / "shifted.bvh"
+    path.write_text(_edit_motion_lines(text, edit))
+    with pytest.raises(bvh.BvhError, match=rf"shifted\.bvh: line {first_data_line} holds {held} values, "
+                                           r"but the HIERARCHY declares 66 channels"):
+        bvh.read_bvh(path)
+
+
+def test_a_short_file_warns_naming_the_file(tmp_path):
+    path = tmp_path / "cut.bvh"
+    path.write_text(SAMPLE.replace("Frames:\t2", "Frames: 3"))
+    with pytest.warns(UserWarning, match=r"cut\.bvh: declares 3 frames but holds 2"):
+        assert bvh.read_bvh(path).num_frames == 2
+    path.write_text(SAMPLE.replace("Frames:\t2", "Frames: 1"))
+    with pytest.warns(UserWarning, match=r"cut\.bvh: holds 2 frames but declares 1"):
+        assert bvh.read_bvh(path).num_frames == 1
+
+
+@pytest.mark.parametrize("value, problem", [("nan", "is not a positive finite number of seconds"),
+                                            ("-0.01", "is not a positive finite number of seconds"),
+                                            ("1e6", "is implausible"), ("abc", "is not a number")])
+def test_frame_time_must_be_a_plausible_number_of_seconds(tmp_path, value, problem):
+    path = tmp_path / "slow.bvh"
+    path.write_text(SAMPLE.replace("Frame Time: 0.0833333", f"Frame Time: {value}"))
+    with pytest.raises(bvh.BvhError, match=rf"slow\.bvh: Frame Time '?{value}'? (s )?{problem}"):
+        bvh.read_bvh(path)

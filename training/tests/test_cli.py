@@ -101,3 +101,81 @@ def test_unexpected_errors_keep_their_traceback(files, monkeypatch):
     monkeypatch.setattr(average, "main", bug)
     with pytest.raises(KeyError):
         main(["average", str(files / "other.pt"), "--out", str(files / "b.pt")])
+
+
+def test_average_errors_are_one_line_on_stderr(files, capsys):
+    t = files
+    torch.manual_seed(0)
+    from training.model import ModelConfig, PoseNet
+    net = PoseNet(ModelConfig(16, 8, 1, 16))
+    for name in ("a.pt", "b.pt"):
+        torch.save({"model": net.state_dict(), "config": net.config.to_dict()}, t / name)
+    last = _fails(capsys, "average", t / "a.pt", t / "b.pt", "--weights", "1", "--out", t / "s.pt",
+                  says="--weights: 1 weights for 2 checkpoints")
+    assert "average: average:" not in last
+    main(["average", str(t / "a.pt"), str(t / "b.pt"), "--weights", "inf", "1", "--out", str(t / "s.pt")])
+    assert capsys.readouterr().out == ""     # the message went to stderr, not stdout
+    _fails(capsys, "average", t / "a.pt", t / "b.pt", "--weights", "inf", "1", "--out", t / "s.pt",
+           says="--weights inf 1: weights must be finite")
+    _fails(capsys, "average", t / "a.pt", t / "b.pt", "--out", t / "b.pt", says="is one of the checkpoints")
+    assert not (t / "s.pt").exists()
+
+
+def test_export_refuses_non_finite_weights_and_a_bad_config_even_unchecked(files, capsys):
+    from training.model import ModelConfig, PoseNet
+    t = files
+    torch.manual_seed(0)
+    net = PoseNet(ModelConfig(16, 8, 1, 16))
+    state = {k: v.clone() for k, v in net.state_dict().items()}
+    state["head.2.bias"][0] = float("nan")
+    torch.save({"model": state, "config": net.config.to_dict()}, t / "nan.pt")
+    config = dict(net.config.to_dict(), hidden=-5)
+    torch.save({"model": net.state_dict(), "config": config}, t / "negative.pt")
+    _fails(capsys, "export", "--checkpoint", t / "nan.pt", "--no-check", "--out", t / "m",
+           says=f"{t / 'nan.pt'}: the weights hold NaN or inf (head.2.bias)")
+    _fails(capsys, "export", "--checkpoint", t / "negative.pt", "--no-check", "--out", t / "m",
+           says=f"{t / 'negative.pt'}: invalid network config (hidden -5: expected a positive integer)")
+    _fails(capsys, "average", t / "negative.pt", t / "negative.pt", "--out", t / "s.pt",
+           says=f"{t / 'negative.pt'}: invalid network config")
+    assert not (t / "m").exists()
+
+
+def test_train_smoke_refuses_a_data_folder(files, capsys):
+    t = files
+    _fails(capsys, "train", "--smoke", "--bvh", t / "clips", "--ckpt-dir", t / "ck", "--results-dir", t / "res",
+           says="--smoke trains on procedural motions and cannot be combined with --bvh")
+    assert not (t / "ck").exists() and not (t / "res").exists()
+
+
+FULL_DISK = """
+import resource, signal, sys
+from training.__main__ import main
+# files larger than 20 kB cannot be written: what a full disk does to a checkpoint (EFBIG instead
+# of ENOSPC; torch's own file writer aborted the process on either)
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_a_full_disk_while_saving_a_checkpoint_is_one_line_not_an_abort(files):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    from training.model import ModelConfig, PoseNet
+    t = files
+    net = PoseNet(ModelConfig(32, 32, 1, 32))   # ~80 kB
+    for name in ("a.pt", "b.pt"):
+        torch.save({"model": net.state_dict(), "config": net.config.to_dict()}, t / name)
+    repo = Path(__file__).resolve().parents[2]
+    env = dict(os.environ, PYTHONPATH=str(repo))
+    runs = {"average": ([t / "a.pt", t / "b.pt", "--out", t / "soup" / "s.pt"], t / "soup" / "s.pt"),
+            "train": (["--smoke", "--steps", "2", "--ckpt-dir", t / "ck", "--results-dir", t / "res"], t / "ck")}
+    for command, (rest, target) in runs.items():
+        r = subprocess.run([sys.executable, "-c", FULL_DISK, command] + [str(a) for a in rest], env=env,
+                           cwd=repo, capture_output=True, text=True, timeout=300)
+        last = r.stderr.replace("\r", "\n").strip().splitlines()[-1]
+        assert r.returncode == 1 and "Traceback" not in r.stderr and "terminate" not in r.stderr, r.stderr
+        assert last.startswith(f"training {command}: {target}") and "cannot write the checkpoint" in last, r.stderr
+    assert os.listdir(t / "soup") == [] and os.listdir(t / "ck") == []   # no partial file, no temporary

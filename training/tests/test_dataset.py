@@ -7,7 +7,8 @@ import pytest
 
 from training import dataset as ds
 from training import skeleton as sk
-from training.cli import CommandError
+from training.bvh import BvhError
+from training.cli import CommandError, UsageError
 
 # subject numbers of the 96 subjects in ../shared/data/cmu (a fact from its manifest)
 CMU_SUBJECTS = [1, 2, 3, 6, 7, 8, 9, 10, 11, 12, 13, 15, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29,
@@ -158,3 +159,36 @@ def test_extract_and_prepare(fixture_dir, tmp_path, capsys):
     stale.mkdir()
     ds.main(args)
     assert not stale.exists()                                  # older code versions are pruned
+
+
+@pytest.mark.parametrize("damage, problem", [
+    (lambda t: t.replace(",status,", ",state,").encode(), r"manifest\.csv: no status column"),
+    (lambda t: t.replace("\n02_01,2,", "\n02_01,two,").encode(), r"manifest\.csv line 2: subject 'two' is not"),
+    (lambda t: b"\xff\xff" + t.encode(), r"manifest\.csv: not UTF-8 text"),
+    (lambda t: (t + "03_05\n").encode(), r"manifest\.csv line \d+: subject '' is not"),
+])
+def test_a_malformed_manifest_is_one_usage_error_naming_it(tmp_path, fixture_dir, damage, problem):
+    d, _ = fixture_dir
+    man = tmp_path / "manifest.csv"
+    man.write_bytes(damage((d / "manifest.csv").read_text()))
+    with pytest.raises(UsageError, match=problem):
+        ds.list_clips(tmp_path)
+
+
+def test_a_manifest_with_a_byte_order_mark_is_read(tmp_path, fixture_dir):
+    d, _ = fixture_dir
+    (tmp_path / "manifest.csv").write_bytes(b"\xef\xbb\xbf" + (d / "manifest.csv").read_bytes())
+    assert [r["clip"] for r in ds.read_manifest(tmp_path / "manifest.csv")] == \
+        [r["clip"] for r in ds.read_manifest(d / "manifest.csv")]
+
+
+def test_a_zero_frame_clip_beside_good_ones_is_refused_naming_it(tmp_path, fixture_dir):
+    """As a damaged clip is: the folder is refused with the file's name, not np.pad's
+    "can't extend empty axis" later."""
+    d, _ = fixture_dir
+    (tmp_path / "clips").mkdir()
+    good = (d / "bvh" / "02" / "02_01.bvh").read_text()
+    (tmp_path / "clips" / "02_01.bvh").write_text(good)
+    (tmp_path / "clips" / "empty.bvh").write_text(good[:good.index("Frames:")] + "Frames: 0\nFrame Time: 0.0416667\n")
+    with pytest.raises(BvhError, match=r"empty\.bvh: the clip has no frames"):
+        ds.load_motions(tmp_path / "clips", cache=False, workers=1, progress=False)

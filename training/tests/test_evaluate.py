@@ -199,3 +199,54 @@ def test_wrist_sensor_place_changes_what_the_wrist_sensors_report():
     np.testing.assert_allclose(gb[:, 18:20], strap.imu_orientation[:, 1:3], atol=1e-5)
     with pytest.raises(ValueError, match="wrist sensor place 'elbow'"):
         ev.synthesize_clip(m, np.random.default_rng(0), wrist="elbow")
+
+
+@pytest.mark.parametrize("option, value", [("--seed", "-1"), ("--max-seconds", "nan"), ("--max-seconds", "inf"),
+                                           ("--max-seconds", "-1"), ("--max-seconds", "0"),
+                                           ("--max-clips", "-1"), ("--max-clips", "0")])
+def test_bad_option_values_are_usage_errors(option, value, capsys):
+    parser = ev.add_arguments(__import__("argparse").ArgumentParser(prog="evaluate"))
+    with pytest.raises(SystemExit) as e:
+        parser.parse_args([option, value])
+    assert e.value.code == 2 and f"argument {option}" in capsys.readouterr().err
+
+
+def test_max_seconds_shorter_than_a_frame_is_refused():
+    from training.cli import UsageError
+    m = procedural.make_motion("walk", 1.0, seed=0)
+    with pytest.raises(UsageError, match="--max-seconds 0.001 is shorter than one frame"):
+        ev._trim([m], 0, 0.001)
+    assert ev._trim([m, m], 1, 0.5)[0].num_frames == 30
+
+
+def test_a_report_with_nan_model_metrics_is_refused(tmp_path):
+    """NaN metrics are a broken model (or input), not a "-" in a report."""
+    from training.cli import CommandError
+    torch.manual_seed(0)
+    cfg = ModelConfig(embed=16, hidden=8, layers=1, head=16)
+    net = PoseNet(cfg).eval()
+    with torch.no_grad():
+        next(net.parameters()).fill_(float("nan"))
+    ckpt = tmp_path / "nan.pt"
+    torch.save({"model": net.state_dict(), "config": cfg.to_dict()}, ckpt)
+    out = tmp_path / "res"
+    with pytest.raises(CommandError, match=r"the PyTorch fp32 results are not finite \(angle_all"):
+        ev.evaluate([procedural.make_motion("walk", 1.0, seed=0)], (), ckpt, out, latency=False)
+    assert not (out / "evaluation.md").exists()
+
+
+def test_an_unusable_clip_in_the_folder_is_one_line_naming_it(tmp_path, fixture_dir, capsys):
+    import shutil
+    import re
+    from training.__main__ import main as training_main
+    src, _ = fixture_dir
+    d = tmp_path / "folder"
+    shutil.copytree(src, d)
+    victim = sorted(d.rglob("*.bvh"))[1]
+    victim.write_text(re.sub(r"(End Site\s*\{\s*OFFSET)[^\n]*", r"\1 0 0 0", victim.read_text()))
+    rc = training_main(["evaluate", "--bvh", str(d), "--no-torch", "--models", "--out", str(tmp_path / "r"),
+                        "--no-latency", "--no-cache"])
+    err = capsys.readouterr().err
+    assert rc == 1 and "Traceback" not in err
+    assert f"{victim}: the bone" in err and "zero length" in err, err
+    assert not (tmp_path / "r" / "evaluation.md").exists()

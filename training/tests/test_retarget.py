@@ -1,3 +1,5 @@
+import re
+
 import numpy as np
 import pytest
 
@@ -211,3 +213,49 @@ def test_smpl_bvh_roundtrip():
 def test_unknown_skeleton_rejected():
     with pytest.raises(ValueError):
         rt.detect_source(["root", "a", "b"])
+
+
+def _scaled_offsets(text, factor):
+    return re.sub(r"OFFSET ([^\n]*)",
+                  lambda m: "OFFSET " + " ".join(f"{float(v) * factor:g}" for v in m.group(1).split()), text)
+
+
+def _root_x_of_frame(text, frame, value):
+    lines = text.split("\n")
+    k = lines.index("MOTION") + 3 + frame
+    lines[k] = " ".join([value] + lines[k].split()[1:])
+    return "\n".join(lines)
+
+
+_DAZ_TEXT = bvh.format_bvh(motion_to_daz(make_motion("walk", 1.0, seed=4)), order="ZXY", decimals=4)
+
+UNUSABLE = {
+    "no_left_foot": (_DAZ_TEXT.replace("lFoot", "lFootX"), "the daz skeleton lacks lFoot"),
+    "unknown_names": (_DAZ_TEXT.replace("lThigh", "leftThigh"), "unknown source skeleton"),
+    "offsets_x1000": (_scaled_offsets(_DAZ_TEXT, 1000), "cannot infer units from a leg height of 8"),
+    "offsets_zero": (_scaled_offsets(_DAZ_TEXT, 0), "cannot infer units from a leg height of 0.000"),
+    "end_site_zero": (re.sub(r"(End Site\s*\{\s*OFFSET)[^\n]*", r"\1 0 0 0", _DAZ_TEXT),
+                      r"the bone \w+ -> End Site has zero length"),
+    "no_frames": (_DAZ_TEXT[:_DAZ_TEXT.index("Frames:")] + "Frames: 0\nFrame Time: 0.0416667\n",
+                  r"the clip has no frames"),
+    "root_1e300": (_root_x_of_frame(_DAZ_TEXT, 3, "1e300"), r"frame 4: the hips are 1e\+298 m from the origin"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(UNUSABLE))
+def test_a_clip_retargeting_cannot_use_is_refused_naming_the_file(tmp_path, case):
+    """A BvhError (one line from the CLI) naming the file and the problem: never a bare
+    ValueError from deep inside, and never NaN or inf motion."""
+    text, problem = UNUSABLE[case]
+    path = tmp_path / f"{case}.bvh"
+    path.write_text(text)
+    clip = bvh.read_bvh(path)
+    with pytest.raises(bvh.BvhError, match=rf"^{re.escape(str(path))}: {problem}"):
+        rt.to_smpl_motion(clip)
+
+
+def test_resampling_refuses_an_implausible_frame_time():
+    m = make_motion("walk", 1.0, seed=4)
+    # 60 s per source frame would be 3600 output frames per frame: refused before allocating
+    with pytest.raises(ValueError, match="frame time 60.0 s"):
+        rt.resample(m.local_rot[:3], m.root_pos[:3], 60.0)

@@ -440,15 +440,103 @@ def test_export_check_on_the_real_onnx_runtime_passes_and_fails(tmp_path, monkey
 
 
 def test_weights_only_save_is_atomic(tmp_path, monkeypatch):
+    import os
+    from training.cli import CommandError
     src = _tiny_checkpoint(tmp_path / "tiny.pt")
     dst = tmp_path / "w" / "weights.pt"
     tr.save_weights(src, dst)
     before = dst.read_bytes()
 
-    def disk_full(obj, f, *a, **k):
-        Path(f).write_bytes(b"partial")
+    def disk_full(fd):   # the temporary is written, then the disk turns out to be full
         raise OSError(28, "No space left on device")
-    monkeypatch.setattr(torch, "save", disk_full)
-    with pytest.raises(OSError):
+    monkeypatch.setattr(os, "fsync", disk_full)
+    with pytest.raises(CommandError, match=f"{dst}: cannot write the checkpoint"):
         tr.save_weights(src, dst)
     assert dst.read_bytes() == before and [p.name for p in dst.parent.iterdir()] == ["weights.pt"]
+
+
+# ------------------------------------------------------------------ non-finite values, bad options
+def _tiny_config(tmp_path, **kw):
+    return tr.TrainConfig(**{**dict(size="tiny", batch=2, window=30, lr=3e-3, warmup=2, steps=3, budget_minutes=5,
+                                    ckpt_dir=str(tmp_path / "ck"), results_dir=str(tmp_path / "res"),
+                                    progress=False, smoke=True, eval_every_s=1e9), **kw})
+
+
+def test_training_stops_at_a_non_finite_loss_and_saves_no_nan_weights(tmp_path, monkeypatch):
+    from training.cli import CommandError, UsageError
+    motions = _motions(2, 0)
+    with pytest.raises(CommandError, match=r"step 1: the training loss is nan .*--pos-weight"):
+        tr.train(_tiny_config(tmp_path, w_pos=float("nan")), motions, motions[:1])
+    assert not (tmp_path / "ck").exists()
+    # a clip with NaN values is named before any step
+    broken = replace(motions[1], name="broken_clip", root_pos=motions[1].root_pos.copy())
+    broken.root_pos[7, 1] = np.nan
+    with pytest.raises(UsageError, match="training clip broken_clip: its root_pos holds NaN or inf"):
+        tr.train(_tiny_config(tmp_path), [motions[0], broken], motions[:1])
+    with pytest.raises(UsageError, match="validation clip broken_clip"):
+        tr.train(_tiny_config(tmp_path), motions, [broken])
+    assert not (tmp_path / "ck").exists()
+    # a finite loss whose gradient is not (d sqrt(x) / dx at 0), after a good checkpoint: kept
+    tr.train(_tiny_config(tmp_path, steps=2), motions, motions[:1])
+    good = (tmp_path / "ck" / "last.pt").read_bytes()
+    real = tr.compute_losses
+
+    def infinite_gradient(out, batch, cfg):
+        losses = real(out, batch, cfg)
+        losses["loss"] = losses["loss"] + torch.sqrt((out[0] - out[0].detach()).abs().sum())
+        return losses
+    monkeypatch.setattr(tr, "compute_losses", infinite_gradient)
+    with pytest.raises(CommandError, match=r"step 3: the gradient norm is (nan|inf)"):
+        tr.train(_tiny_config(tmp_path, resume=True, steps=4), motions, motions[:1])
+    assert (tmp_path / "ck" / "last.pt").read_bytes() == good
+    # weights that became non-finite (an overflowing learning rate) are never saved
+    monkeypatch.setattr(tr, "compute_losses", real)
+    with pytest.raises(CommandError, match="step 2: .*: the weights became NaN or inf in the previous step"):
+        tr.train(_tiny_config(tmp_path / "huge", lr=float("inf"), steps=2), motions, motions[:1])
+    assert not list((tmp_path / "huge").glob("ck/*.pt"))
+
+
+@pytest.mark.parametrize("option", [
+    "--batch 0", "--batch -1", "--window 0", "--window -5", "--lr nan", "--lr -1", "--lr 0", "--dropout 2",
+    "--dropout 1", "--dropout -0.1", "--seed -1", "--steps 0", "--steps -1", "--budget-minutes -1",
+    "--budget-minutes inf", "--stop-after -3", "--stop-after 0", "--arm-swap 5", "--arm-jitter -1",
+    "--max-clips -1", "--max-clips 0", "--pos-weight nan", "--pos-weight -2", "--steps 2.5"])
+def test_bad_numeric_training_options_are_usage_errors(option, capsys):
+    with pytest.raises(SystemExit) as e:
+        _cli(option.split())
+    assert e.value.code == 2
+    name, value = option.split()
+    assert f"argument {name}: '{value}' is not " in capsys.readouterr().err
+
+
+def test_good_numeric_training_options_pass():
+    cfg = _cli(["--batch", "1", "--window", "1", "--dropout", "0", "--seed", "0", "--arm-swap", "1",
+                "--pos-weight", "0", "--budget-minutes", "0.5", "--steps", "1", "--max-clips", "1"])
+    assert (cfg.batch, cfg.window, cfg.dropout, cfg.seed, cfg.arm_swap, cfg.w_pos, cfg.budget_minutes,
+            cfg.steps, cfg.max_clips) == (1, 1, 0.0, 0, 1.0, 0.0, 0.5, 1, 1)
+
+
+def test_smoke_refuses_options_that_choose_the_data(fixture_dir):
+    from training.cli import UsageError
+    d, _ = fixture_dir
+    for extra in (["--bvh", d], ["--val-bvh", d], ["--max-clips", "3"]):
+        with pytest.raises(UsageError, match=f"--smoke trains on procedural motions .* {extra[0]}"):
+            _cli(["--smoke"] + extra)
+
+
+def test_export_refuses_non_finite_weights_before_writing_anything(tmp_path):
+    from training.cli import UsageError
+    net = export.untrained_model(seed=0, config=ModelConfig(16, 8, 1, 16))
+    with torch.no_grad():
+        net.lstm.bias_ih_l0[2] = float("nan")
+    for model in (net, MirrorEnsemble(net)):
+        with pytest.raises(export.ExportCheckError, match=r"weights hold NaN or inf .*lstm.bias_ih_l0.*nothing written"):
+            export.export(model, tmp_path / "m", model_name="t", check=False)
+    assert not (tmp_path / "m").exists()
+    bad = dict(ModelConfig(16, 8, 1, 16).to_dict(), hidden=-5)
+    torch.save({"model": net.state_dict(), "config": bad}, tmp_path / "bad.pt")
+    with pytest.raises(UsageError, match=f"{tmp_path / 'bad.pt'}: invalid network config .hidden -5"):
+        export.load_checkpoint(tmp_path / "bad.pt")
+    for key, value in (("layers", 0), ("embed", "16"), ("dropout", 1.5), ("head", 2.5)):
+        with pytest.raises(ValueError, match=key):
+            ModelConfig.from_dict(dict(ModelConfig().to_dict(), **{key: value}))
