@@ -214,6 +214,14 @@ def _values_per_line(body: str) -> np.ndarray:
     return np.bincount(np.searchsorted(newlines, starts), minlength=newlines.size + 1)
 
 
+def _line_start(body: str, line: int) -> int:
+    """Offset of the first character of body's line `line` (0-based)."""
+    at = 0
+    for _ in range(line):
+        at = body.index("\n", at) + 1
+    return at
+
+
 def _first_bad_number(body: str, first_line: int) -> str:
     for k, line in enumerate(body.split("\n")):
         for tok in line.split():
@@ -245,10 +253,17 @@ def parse_bvh(text: str, source: str = "") -> BvhClip:
     counts = _values_per_line(body)
     lines = np.flatnonzero(counts)                          # body lines that hold values
     wrong = lines[counts[lines] != n_ch]
+    name = source or "BVH"
+    if wrong.size == 1 and wrong[0] == lines[-1] and counts[wrong[0]] < n_ch:
+        # Only the last line is short: a file cut while it was written. Its whole frames are
+        # good; the cut one is left out, as the C# reader does.
+        warnings.warn(f"{name}: the last motion line (line {first_line + wrong[0]}) is cut short; "
+                      f"it is left out")
+        body = body[:_line_start(body, int(wrong[0]))]
+        lines, wrong = lines[:-1], wrong[:0]
     if wrong.size:
         raise BvhError(f"line {first_line + wrong[0]} holds {counts[wrong[0]]} values, but the HIERARCHY "
                        f"declares {n_ch} channels (every motion line must hold one value per channel)")
-    name = source or "BVH"
     if n_ch and lines.size < n_frames:
         warnings.warn(f"{name}: declares {n_frames} frames but holds {lines.size}; using {lines.size}")
         n_frames = int(lines.size)

@@ -200,6 +200,20 @@ def test_a_short_file_warns_naming_the_file(tmp_path):
         assert bvh.read_bvh(path).num_frames == 1
 
 
+def test_a_file_cut_inside_its_last_line_keeps_its_whole_frames(tmp_path):
+    """A writer stopped mid-line (a crash) leaves a short last line: its whole frames are read,
+    the cut one is left out with a warning, instead of refusing the clip."""
+    whole = SAMPLE.rstrip("\n")
+    cut = whole[:whole.rindex(" ", 0, len(whole) - 5)]     # a few values short on the last line
+    path = tmp_path / "crashed.bvh"
+    path.write_text(cut)
+    with pytest.warns(UserWarning) as caught:
+        clip = bvh.read_bvh(path)
+    assert clip.num_frames == 1
+    assert any("crashed.bvh: the last motion line" in str(w.message) for w in caught)
+    np.testing.assert_array_equal(clip.rotations[0], bvh.parse_bvh(SAMPLE).rotations[0])
+
+
 @pytest.mark.parametrize("value, problem", [("nan", "is not a positive finite number of seconds"),
                                             ("-0.01", "is not a positive finite number of seconds"),
                                             ("1e6", "is implausible"), ("abc", "is not a number")])
