@@ -703,6 +703,11 @@ def main(args=None) -> int:
     if not args.no_torch and ckpt is None:
         print("evaluate: no checkpoint found; PyTorch skipped")
     models = [str(m) for m in DEFAULT_MODELS] if args.models is None else args.models
+    # Say what is measured: the default checkpoint is a training run's best.pt when one exists,
+    # which a scratch run can have replaced.
+    print(f"evaluate: {len(motions)} clips ({'BVH folder' if args.bvh else 'split'} {source}); "
+          f"PyTorch {_shown_path(ckpt) if ckpt else '-'}; ONNX "
+          f"{', '.join(_shown_path(m) for m in models) or '-'}")
     r = evaluate(motions, models, ckpt, args.out, args.seed, not args.no_latency,
                  source=f"{'BVH folder ' if args.bvh else 'split '}{source}",
                  mirror=not getattr(args, "no_mirror", False),
