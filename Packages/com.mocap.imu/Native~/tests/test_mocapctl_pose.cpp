@@ -214,11 +214,13 @@ TEST(MocapctlStream, FramesLostToATooHighSpeedAreReported)
     const long all_poses = std::stol(m[1]);
     EXPECT_GT(all_poses, 1000);
 
-    // 30 s of capture in 30 ms: no CPU solves 1,300 frames in that time.
+    // 30 s of capture in 30 ms: no CPU solves 1,300 frames in that time. What is lost depends on
+    // the machine: poses, frames, or (a slow build) input bytes, up to the calibration itself,
+    // when nothing is sent and the exit status is 1.
     Result hurried = mocapctl(common + " --speed 1000");
-    ASSERT_EQ(hurried.exit_code, 0) << hurried.output;
     ASSERT_TRUE(std::regex_search(hurried.output, m, sent)) << hurried.output;
     EXPECT_LT(std::stol(m[1]), all_poses);
+    EXPECT_EQ(hurried.exit_code, std::stol(m[1]) > 0 ? 0 : 1) << hurried.output;
     const std::regex lost("processing fell behind and lost (\\d+) frame\\(s\\), (\\d+) pose\\(s\\) "
                           "and (\\d+) input byte\\(s\\)");
     ASSERT_TRUE(std::regex_search(hurried.output, m, lost)) << hurried.output;
