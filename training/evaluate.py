@@ -713,10 +713,13 @@ def main(args=None) -> int:
                  mirror=not getattr(args, "no_mirror", False),
                  wrist=getattr(args, "wrist_sensor", None) or expected_wrist_sensor(ckpt),
                  noise=getattr(args, "noise", "realistic"))
+    def shown(v, digits):   # "-" where clips are too short to measure (as in the report)
+        return f"{v:.{digits}f}" if v == v else "-"
     for name, s in r["results"].items():
         print(f"{name:14s} angle {s['angle_all']:6.2f} deg (DIP15 {s['angle_dip']:6.2f})  SIP "
-              f"{s['sip']:6.2f}  pos {s['pos']:6.2f} cm  drift 2/5/10 s {s['drift_2s']:.3f} / "
-              f"{s['drift_5s']:.3f} / {s['drift_10s']:.3f} m  jitter {s['jitter']:.2f} x10^2 m/s^3")
+              f"{s['sip']:6.2f}  pos {s['pos']:6.2f} cm  drift 2/5/10 s {shown(s['drift_2s'], 3)} / "
+              f"{shown(s['drift_5s'], 3)} / {shown(s['drift_10s'], 3)} m  jitter "
+              f"{shown(s['jitter'], 2)} x10^2 m/s^3")
     if r["latency"]:
         print(f"latency (ORT, T=1, 1 thread): p50 {r['latency']['p50_us']:.0f} us, p99 "
               f"{r['latency']['p99_us']:.0f} us")
