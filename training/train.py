@@ -39,6 +39,9 @@ import io
 import json
 import math
 import os
+import signal
+import sys
+import threading
 import time
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -548,11 +551,26 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         from tqdm import tqdm
         pbar = tqdm(total=total, initial=step, desc="train", unit="step", dynamic_ncols=True)
     net.train()
+    # Ctrl-C finishes the step under way and saves last.pt as of its end, so `--resume` goes on
+    # exactly from there (a step interrupted half way would leave weights, optimizer and random
+    # state out of step with each other); a second Ctrl-C stops at once.
+    interrupted = []
+
+    def on_interrupt(signum, frame):
+        if interrupted:
+            raise KeyboardInterrupt
+        interrupted.append(step)
+        print("\ntrain: Ctrl-C: finishing this step, then saving last.pt (Ctrl-C again to stop at "
+              "once)", file=sys.stderr)
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous_handler = signal.signal(signal.SIGINT, on_interrupt) if in_main_thread else None
     # A stopped run (non-finite loss, full disk) closes its progress bar first, so the error
     # line that follows stands on a line of its own.
     try:
         while True:
             if total is not None and step >= total:
+                break
+            if interrupted:
                 break
             if cfg.stop_after is not None and step >= cfg.stop_after:
                 print(f"train: stopped after step {step} (--stop-after); --resume continues the run")
@@ -631,6 +649,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
                 _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
                 last_ckpt = time.time()
     finally:
+        if in_main_thread:
+            signal.signal(signal.SIGINT, previous_handler)
         if pbar is not None:
             pbar.close()
     _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
@@ -649,6 +669,10 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     (results_dir / "train_log.json").write_text(json.dumps(log, indent=1))
     plot_losses(history, results_dir / "loss.png")
     print("train: " + json.dumps({k: v for k, v in summary.items() if k != "best"}))
+    if interrupted:
+        # Not a finished run: a script going on to `export` must not take it for one.
+        raise CommandError(f"interrupted (Ctrl-C) after step {step}: {ckpt_dir / 'last.pt'} saved; "
+                           f"--resume continues the run")
     return summary
 
 

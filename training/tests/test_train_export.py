@@ -280,6 +280,46 @@ def test_a_run_stopped_and_resumed_ends_with_the_weights_of_an_uninterrupted_one
     assert a["batcher"]["pos"] == b["batcher"]["pos"]
 
 
+def test_ctrl_c_finishes_the_step_saves_and_resumes_exactly(tmp_path, monkeypatch):
+    """Ctrl-C during step 4 (a real SIGINT to this process): the step completes, last.pt holds
+    its end, the run reports the interruption as an error, and --resume ends with the weights of
+    a run that was never interrupted."""
+    import os
+    import signal
+    from training.cli import CommandError
+    train_m = _motions(4, 0)
+
+    def config(name, **kw):
+        return tr.TrainConfig(size="tiny", batch=3, window=40, lr=3e-3, warmup=2, steps=9,
+                              budget_minutes=1e6, ckpt_dir=str(tmp_path / name / "ck"),
+                              results_dir=str(tmp_path / name / "res"), progress=False,
+                              smoke=True, eval_every_s=1e9, ckpt_every_s=1e9, **kw)
+
+    tr.train(config("whole"), train_m, [])
+    calls = []
+    real_next = tr.StreamBatcher.next
+
+    def next_with_ctrl_c(self):
+        calls.append(1)
+        if len(calls) == 4:
+            os.kill(os.getpid(), signal.SIGINT)
+        return real_next(self)
+
+    monkeypatch.setattr(tr.StreamBatcher, "next", next_with_ctrl_c)
+    cut = config("cut")
+    with pytest.raises(CommandError, match="interrupted .* after step 4: .*last.pt saved"):
+        tr.train(cut, train_m, [])
+    monkeypatch.setattr(tr.StreamBatcher, "next", real_next)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # handler given back
+    ck = torch.load(str(tmp_path / "cut" / "ck" / "last.pt"), weights_only=False)
+    assert ck["step"] == 4
+    assert tr.train(replace(cut, resume=True), train_m, [])["steps"] == 9
+    a = torch.load(str(tmp_path / "whole" / "ck" / "last.pt"), weights_only=False)
+    b = torch.load(str(tmp_path / "cut" / "ck" / "last.pt"), weights_only=False)
+    for name, value in a["model"].items():
+        assert torch.equal(value, b["model"][name]), name
+
+
 def test_stop_after_belongs_to_one_sitting(tmp_path, monkeypatch):
     motions = _motions(3, 0)
     monkeypatch.setattr(tr, "load_data", lambda cfg: (motions, []))
