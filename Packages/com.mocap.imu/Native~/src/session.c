@@ -538,6 +538,12 @@ static int frame_is_new(const mocap_session *s, const mocap_frame *f)
     return !s->have_latest || f->sequence > s->latest.sequence;
 }
 
+static void hand_out_frame(mocap_session *s, const mocap_frame *f)
+{
+    s->latest = *f;
+    s->have_latest = 1;
+}
+
 mocap_status mocap_session_poll_latest(mocap_session *s, mocap_frame *out)
 {
     if (!s || !out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or out is NULL");
@@ -545,8 +551,7 @@ mocap_status mocap_session_poll_latest(mocap_session *s, mocap_frame *out)
     const mocap_frame *f;
     while ((f = (const mocap_frame *)spsc_ring_peek(&s->frames)) != NULL) {
         if (frame_is_new(s, f)) {
-            s->latest = *f;
-            s->have_latest = 1;
+            hand_out_frame(s, f);
             got = 1;
         }
         spsc_ring_release(&s->frames);
@@ -555,8 +560,7 @@ mocap_status mocap_session_poll_latest(mocap_session *s, mocap_frame *out)
      * newest is here. Taken after the ring, so it is at least as new as what the ring held. */
     const mocap_frame *newest = (const mocap_frame *)triple_buffer_take(&s->newest_frame);
     if (newest && frame_is_new(s, newest)) {
-        s->latest = *newest;
-        s->have_latest = 1;
+        hand_out_frame(s, newest);
         got = 1;
     }
     if (!got) return end_or_no_data(s);
@@ -572,8 +576,7 @@ mocap_status mocap_session_drain(mocap_session *s, mocap_frame *out, uint32_t ca
     uint32_t n = 0;
     while (n < capacity && spsc_ring_pop(&s->frames, &out[n]) == 0) {
         if (!frame_is_new(s, &out[n])) continue; /* a poll already handed it out */
-        s->latest = out[n];
-        s->have_latest = 1;
+        hand_out_frame(s, &out[n]);
         ++n;
     }
     *count = n;

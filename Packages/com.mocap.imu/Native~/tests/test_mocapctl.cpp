@@ -213,14 +213,31 @@ TEST(Mocapctl, AnOutputThatIsTheCaptureBeingReadIsRefused)
     EXPECT_NE(r.output.find("name the same file"), std::string::npos) << r.output;
 }
 
+namespace {
+
+// A command line refused as a usage error: exit status 2 and a message holding `expect`.
+struct UsageErrorCase {
+    std::string args, expect;
+};
+
+template <size_t N>
+void expect_usage_errors(const UsageErrorCase (&cases)[N])
+{
+    for (const auto &c : cases) {
+        CommandResult r = run_command(c.args);
+        EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << "\n" << r.output;
+    }
+}
+
+}  // namespace
+
 // A missing value or a number that is not one is a usage error (exit 2) that names the option;
 // before, `--seconds abc` was 0 seconds and `--out --seconds 1` wrote a file called --seconds.
 TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
 {
     std::string dir = test_temp_dir();
-    const struct {
-        std::string args, expect;
-    } cases[] = {
+    const UsageErrorCase cases[] = {
         {"synth --out " + dir + "/a.cap --seconds abc", "--seconds wants a number, got 'abc'"},
         {"synth --out " + dir + "/a.cap --seconds", "--seconds needs a value"},
         {"synth --out --seconds 1", "--out needs a value, not the option --seconds"},
@@ -231,11 +248,7 @@ TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
         {"replay " + dir + "/a.cap --rate 0", "--rate 0 is outside 1..1000"},
         {"bench latency --threads 100000", "--threads 100000 is outside 1..256"},
     };
-    for (const auto &c : cases) {
-        CommandResult r = run_command(c.args);
-        EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
-        EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << "\n" << r.output;
-    }
+    expect_usage_errors(cases);
     EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
     EXPECT_FALSE(std::filesystem::exists(dir + "/r.cap")) << "a refused record left a capture";
     EXPECT_FALSE(std::filesystem::exists("--seconds"));
@@ -254,9 +267,7 @@ TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
 TEST(Mocapctl, UnknownOptionsAreRefusedBeforeTheCommandRuns)
 {
     std::string dir = test_temp_dir();
-    const struct {
-        std::string args, expect;
-    } cases[] = {
+    const UsageErrorCase cases[] = {
         {"synth --out " + dir + "/a.cap --secnds 1", "synth has no option --secnds"},
         {"synth --out " + dir + "/a.cap --seconds=5", "write '--seconds 5'"},
         {"replay " + dir + "/a.cap --speed 2", "replay has no option --speed"},
@@ -273,11 +284,7 @@ TEST(Mocapctl, UnknownOptionsAreRefusedBeforeTheCommandRuns)
         {"replay " + dir + "/a.cap --out " + dir + "/o.bvh --csv " + dir + "/f.csv", "use --pose-csv"},
         {"live --port /dev/null --smoothing 2", "--smoothing applies to poses only"},
     };
-    for (const auto &c : cases) {
-        CommandResult r = run_command(c.args);
-        EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
-        EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << "\n" << r.output;
-    }
+    expect_usage_errors(cases);
     EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
     EXPECT_FALSE(std::filesystem::exists(dir + "/r.cap"));
     EXPECT_FALSE(std::filesystem::exists(dir + "/o"));

@@ -97,13 +97,19 @@ static int option_kind(const char *known, const char *name, size_t length)
     return 0;
 }
 
+/* 1 when argv[i] is an option of `known` that takes a value and argv[i + 1] is that value
+ * (whatever it says: a file may be called -h). */
+static int value_follows(const char *known, int argc, char **argv, int i)
+{
+    return strncmp(argv[i], "--", 2) == 0 && option_kind(known, argv[i], strlen(argv[i])) == 2 &&
+           i + 1 < argc && strncmp(argv[i + 1], "--", 2) != 0;
+}
+
 int cli_asks_for_help(int argc, char **argv, const char *known)
 {
     for (int i = 0; i < argc; ++i) {
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) return 1;
-        if (strncmp(argv[i], "--", 2) == 0 && option_kind(known, argv[i], strlen(argv[i])) == 2 &&
-            i + 1 < argc && strncmp(argv[i + 1], "--", 2) != 0)
-            ++i; /* its value, whatever it says */
+        if (value_follows(known, argc, argv, i)) ++i;
     }
     return 0;
 }
@@ -113,9 +119,11 @@ void cli_refuse_unknown(const char *command, int argc, char **argv, const char *
     for (int i = 0; i < argc; ++i) {
         const char *arg = argv[i];
         if (strncmp(arg, "--", 2) != 0) continue;
-        const int kind = option_kind(known, arg, strlen(arg));
-        if (kind == 2 && i + 1 < argc && strncmp(argv[i + 1], "--", 2) != 0) ++i; /* its value */
-        if (kind != 0) continue;
+        if (value_follows(known, argc, argv, i)) {
+            ++i;
+            continue;
+        }
+        if (option_kind(known, arg, strlen(arg)) != 0) continue;
         const char *equals = strchr(arg, '=');
         if (equals && option_kind(known, arg, (size_t)(equals - arg)) == 2)
             usage_exit("%s: write '%.*s %s': a value follows its option after a space", command,
@@ -124,10 +132,10 @@ void cli_refuse_unknown(const char *command, int argc, char **argv, const char *
     }
 }
 
-void cli_refuse_option(int argc, char **argv, const char *name, const char *why)
+void cli_refuse_options(int argc, char **argv, const char *names, const char *why)
 {
     for (int i = 0; i < argc; ++i)
-        if (strcmp(argv[i], name) == 0) usage_exit("%s %s", name, why);
+        if (option_kind(names, argv[i], strlen(argv[i])) != 0) usage_exit("%s %s", argv[i], why);
 }
 
 /* Both paths name one existing file (the same device and inode: links and other spellings

@@ -26,9 +26,9 @@ void cli_refuse_unknown(const char *command, int argc, char **argv, const char *
 /* 1 when --help or -h stands where an option would (not as the value of one of `known`). */
 int cli_asks_for_help(int argc, char **argv, const char *known);
 
-/* Usage error when `name` is given in a mode of the command that does not use it: "NAME WHY"
- * (e.g. "--speed applies to --replay only"). */
-void cli_refuse_option(int argc, char **argv, const char *name, const char *why);
+/* Usage error when one of `names` (space-separated, as in `known` above) is given in a mode of
+ * the command that does not use it: "NAME WHY" (e.g. "--speed applies to --replay only"). */
+void cli_refuse_options(int argc, char **argv, const char *names, const char *why);
 
 /* Usage error when an output option names the file `input` (an existing file read by the
  * command: a capture, a truth file), or two outputs name one file: opening the output for

@@ -608,10 +608,8 @@ static int cmd_replay(int argc, char **argv)
         arg_value(argc, argv, "--json") || arg_value(argc, argv, "--pose-csv") ||
         (truth_path && csv_first_row_columns(truth_path) == POSE_TRUTH_COLS))
         return cmd_replay_pose(argc, argv);
-    static const char *const pose_only[] = {"--smoothing", "--bvh-order", NULL};
-    for (int i = 0; pose_only[i]; ++i)
-        cli_refuse_option(argc, argv, pose_only[i],
-                          "applies to the pose model only (--model, --out, --json or --pose-csv)");
+    cli_refuse_options(argc, argv, "--smoothing --bvh-order",
+                       "applies to the pose model only (--model, --out, --json or --pose-csv)");
 
     replay_state *st = (replay_state *)calloc(1, sizeof *st);
     if (!st) return 1;
@@ -1167,8 +1165,8 @@ static int cmd_replay_pose(int argc, char **argv)
     mocap_status s;
 
     /* The solver consumes the frames, at the model's rate. */
-    cli_refuse_option(argc, argv, "--csv", "(sensor frames) is not written with the pose model; use --pose-csv");
-    cli_refuse_option(argc, argv, "--rate", "does not apply with the pose model: frames come at its rate");
+    cli_refuse_options(argc, argv, "--csv", "(sensor frames) is not written with the pose model; use --pose-csv");
+    cli_refuse_options(argc, argv, "--rate", "does not apply with the pose model: frames come at its rate");
     if (truth_path) {
         int cols = csv_first_row_columns(truth_path);
         if (cols < 0) {
@@ -1574,7 +1572,7 @@ static int cmd_live(int argc, char **argv)
     /* Read before anything is opened: a bad value must not leave an empty capture behind. */
     const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
     const int with_model = arg_value(argc, argv, "--model") != NULL || arg_flag(argc, argv, "--pose");
-    if (!with_model) cli_refuse_option(argc, argv, "--smoothing", "applies to poses only (add --pose or --model)");
+    if (!with_model) cli_refuse_options(argc, argv, "--smoothing", "applies to poses only (add --pose or --model)");
     mocap_model *model = NULL;
     mocap_model_info info;
     /* The model first: the session's output rate is the model's frame rate. */
@@ -1686,13 +1684,10 @@ static int cmd_stream(int argc, char **argv)
                         "--replay CAPTURE or --port DEV\n");
         return usage();
     }
-    if (port) {
-        static const char *const replay_only[] = {"--speed", "--realtime", "--prelude", NULL};
-        for (int i = 0; replay_only[i]; ++i)
-            cli_refuse_option(argc, argv, replay_only[i], "applies to --replay only");
-    } else {
-        cli_refuse_option(argc, argv, "--baud", "applies to --port only");
-    }
+    if (port)
+        cli_refuse_options(argc, argv, "--speed --realtime --prelude", "applies to --replay only");
+    else
+        cli_refuse_options(argc, argv, "--baud", "applies to --port only");
     const int characters = port ? 1 : nrep;
     if (ndest != characters) {
         fprintf(stderr, "mocapctl stream: %d character(s) but %d --vmc destination(s): character i "
