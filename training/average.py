@@ -12,14 +12,14 @@ dropout) can be averaged; the result keeps the first checkpoint's config.
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import torch
 
-from .cli import UsageError
-from .model import ModelConfig, non_finite_tensors
-from .train import atomic_torch_save, checkpoint_model_config, load_checkpoint_file
+from .cli import UsageError, same_file
+from .model import ModelConfig
+from .train import (atomic_torch_save, checkpoint_model_config, load_checkpoint_file, require_finite_weights,
+                    require_pose_checkpoint)
 
 
 def average_state_dicts(states: list, weights: list | None = None) -> dict:
@@ -70,17 +70,13 @@ def average_checkpoints(paths: list, out, weights: list | None = None) -> dict:
     weights = check_weights(weights, len(paths))
     for p in paths:
         # The soup is written over --out: an input there would be lost, replaced by the mean.
-        if Path(out).exists() and Path(p).exists() and os.path.samefile(p, out):
+        if Path(out).exists() and Path(p).exists() and same_file(p, out):
             raise UsageError(f"--out {out} is one of the checkpoints to average ({p}); write the "
                              f"average to another file")
     cks = [load_checkpoint_file(p) for p in paths]
     for p, ck in zip(paths, cks):
-        if not isinstance(ck, dict) or not isinstance(ck.get("model"), dict) or not isinstance(ck.get("config"), dict):
-            raise UsageError(f"{p} is not a pose model checkpoint (no 'model' weights and 'config')")
-        bad = non_finite_tensors(ck["model"])
-        if bad:
-            raise UsageError(f"{p}: the weights hold NaN or inf ({', '.join(bad[:3])}"
-                             f"{', ...' if len(bad) > 3 else ''}); the average would be NaN")
+        require_pose_checkpoint(ck, p)
+        require_finite_weights(ck["model"], p, "the average would be NaN")
     config = cks[0]["config"]
     for p, ck in zip(paths[1:], cks[1:]):
         if _architecture(ck, p) != _architecture(cks[0], paths[0]):
@@ -96,7 +92,7 @@ def average_checkpoints(paths: list, out, weights: list | None = None) -> dict:
 def _architecture(ck: dict, path) -> ModelConfig:
     """What must agree between averaged networks: the model config without dropout (training
     only; older configs without wrist_anchor read as "hand", as ModelConfig.from_dict does)."""
-    cfg = checkpoint_model_config(ck, path)
+    cfg = checkpoint_model_config(ck["config"], path)
     cfg.dropout = 0.0
     return cfg
 

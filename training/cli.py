@@ -7,6 +7,9 @@ file, ONNX Runtime refusing a model); anything else is a bug and keeps its trace
 """
 from __future__ import annotations
 
+import argparse
+import math
+import os
 from pathlib import Path
 
 
@@ -21,6 +24,35 @@ class UsageError(CommandError, ValueError):
 def one_line(err: BaseException) -> str:
     text = str(err) or type(err).__name__
     return "; ".join(s.strip() for s in text.splitlines() if s.strip())
+
+
+def same_file(a, b) -> bool:
+    """Both paths name one file: the same file where both exist (links, other spellings), else
+    the same resolved path (an output not written yet)."""
+    a, b = Path(a), Path(b)
+    if a.exists() and b.exists():
+        return os.path.samefile(a, b)
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+def number_type(convert, accepts, expected: str):
+    """An argparse type: the value converted, or ArgumentTypeError (exit 2 with the usage) when it
+    does not parse or is out of range; NaN and inf are never accepted."""
+    def parse(text):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {expected}") from None
+        if (isinstance(value, float) and not math.isfinite(value)) or not accepts(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is not {expected}")
+        return value
+    return parse
+
+
+POSITIVE_INT = number_type(int, lambda v: v >= 1, "a positive integer")
+NON_NEGATIVE_INT = number_type(int, lambda v: v >= 0, "an integer >= 0")
+POSITIVE = number_type(float, lambda v: v > 0, "a positive number")
+NON_NEGATIVE = number_type(float, lambda v: v >= 0, "a number >= 0")
 
 
 def require_file(path, option: str) -> Path:

@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
+from .cli import NON_NEGATIVE_INT, POSITIVE_INT, number_type
 
 REPO = Path(__file__).resolve().parent.parent
 MODELS_DIR = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
@@ -177,8 +178,8 @@ def load_torch_model(path, mirror: bool = False):
     'model' / 'state_dict' / 'model_state' (else the dict itself) and the config under 'config'.
     mirror: wrapped in model.MirrorEnsemble, as `training export` ships it."""
     import torch
-    from .model import ModelConfig, PoseNet
-    from .train import load_checkpoint_file
+    from .model import PoseNet
+    from .train import checkpoint_model_config, load_checkpoint_file
     from .cli import UsageError
     ckpt = load_checkpoint_file(path)
     if isinstance(ckpt, torch.nn.Module):
@@ -187,10 +188,7 @@ def load_torch_model(path, mirror: bool = False):
         raise UsageError(f"{path} is not a pose model checkpoint (it holds a {type(ckpt).__name__})")
     cfg = ckpt.get("config") or ckpt.get("model_config") or {}
     if isinstance(cfg, dict):
-        try:
-            cfg = ModelConfig.from_dict(cfg)
-        except (ValueError, TypeError, AttributeError) as e:
-            raise UsageError(f"{path}: invalid network config ({e})") from e
+        cfg = checkpoint_model_config(cfg, path)
     net = PoseNet(cfg)
     state = None
     for key in ("model", "state_dict", "model_state", "net"):
@@ -626,33 +624,7 @@ def _trim(motions, max_clips, max_seconds):
     return motions
 
 
-def _count(text: str, least: int) -> int:
-    """argparse type: a whole number >= least (a bad value is a usage error, not a traceback)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < least:
-        raise argparse.ArgumentTypeError(f"{text} is less than {least}")
-    return value
-
-
-def _positive_count(text: str) -> int:
-    return _count(text, 1)
-
-
-def _seed(text: str) -> int:
-    return _count(text, 0)      # numpy's generators take no negative seeds
-
-
-def _positive_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive finite number of seconds")
-    return value
+_POSITIVE_SECONDS = number_type(float, lambda v: v > 0, "a positive finite number of seconds")
 
 
 def add_arguments(p):
@@ -668,9 +640,9 @@ def add_arguments(p):
     p.add_argument("--no-mirror", dest="no_mirror", action="store_true",
                    help="evaluate the checkpoint as a single network, not mirror-averaged as exported")
     p.add_argument("--out", default=str(RESULTS_DIR))
-    p.add_argument("--max-clips", type=_positive_count, default=0, help="evaluate the first N clips")
-    p.add_argument("--max-seconds", type=_positive_seconds, default=0.0, help="cut clips to this length")
-    p.add_argument("--seed", type=_seed, default=0)
+    p.add_argument("--max-clips", type=POSITIVE_INT, default=0, help="evaluate the first N clips")
+    p.add_argument("--max-seconds", type=_POSITIVE_SECONDS, default=0.0, help="cut clips to this length")
+    p.add_argument("--seed", type=NON_NEGATIVE_INT, default=0)  # numpy's generators take no negative seeds
     p.add_argument("--wrist-sensor", dest="wrist_sensor", default=None, choices=sk.WRIST_SENSOR_PLACES,
                    help="where the synthesised wrist sensors are: hand (back of the hands) or forearm "
                         "(wrist straps); default: where the checkpoint was trained to expect them "

@@ -228,8 +228,7 @@ def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", ch
     or no ONNX Runtime, would otherwise install a model that outputs NaN)."""
     bad = non_finite_tensors(net.state_dict())
     if bad:
-        raise ExportCheckError(f"the network's weights hold NaN or inf ({', '.join(bad[:3])}"
-                               f"{', ...' if len(bad) > 3 else ''}); nothing written")
+        raise ExportCheckError(f"the network's weights hold NaN or inf ({bad}); nothing written")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     p32, p16 = out_dir / FP32_NAME, out_dir / FP16_NAME

@@ -366,8 +366,10 @@ def count_parameters(net: nn.Module) -> int:
     return sum(p.numel() for p in net.parameters())
 
 
-def non_finite_tensors(state: dict) -> list:
-    """Names of the floating-point tensors of a state dict that hold NaN or inf: weights that
-    make every output NaN, whatever the input."""
-    return [k for k, v in state.items()
-            if torch.is_tensor(v) and v.is_floating_point() and not bool(torch.isfinite(v).all())]
+def non_finite_tensors(state: dict) -> str:
+    """The names of the floating-point tensors of a state dict that hold NaN or inf, for a
+    message ("a, b, c, ..."; "" when all are finite): weights that make every output NaN,
+    whatever the input."""
+    bad = [k for k, v in state.items()
+           if torch.is_tensor(v) and v.is_floating_point() and not bool(torch.isfinite(v).all())]
+    return ", ".join(bad[:3]) + (", ..." if len(bad) > 3 else "")

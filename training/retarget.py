@@ -330,9 +330,10 @@ def to_smpl_motion(clip: BvhClip, name: str = "", subject: int = 0, elbow_revers
     m = sk.Motion(name=name, subject=int(subject), fps=float(fps), local_rot=local.astype(np.float32),
                   root_pos=root.astype(np.float32), offsets=offsets.astype(np.float32))
     # the checks above should leave nothing non-finite; training and evaluation must never see it
-    for what, v in (("joint rotations", m.local_rot), ("root positions", m.root_pos), ("offsets", m.offsets)):
-        if not np.isfinite(v).all():
-            raise _refused(clip, f"the retargeted {what} are not finite")
+    what = {"local_rot": "joint rotations", "root_pos": "root positions", "offsets": "offsets"}
+    bad = m.non_finite_field()
+    if bad:
+        raise _refused(clip, f"the retargeted {what[bad]} are not finite")
     return m
 
 

@@ -110,6 +110,13 @@ class Motion:
     def num_frames(self) -> int:
         return int(self.local_rot.shape[0])
 
+    def non_finite_field(self) -> str:
+        """The first of local_rot, root_pos, offsets that holds NaN or inf ("" when none does)."""
+        for name in ("local_rot", "root_pos", "offsets"):
+            if not np.isfinite(getattr(self, name)).all():
+                return name
+        return ""
+
     @property
     def seconds(self) -> float:
         return self.num_frames / float(self.fps)

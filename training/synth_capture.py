@@ -49,6 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
+from .cli import number_type, same_file
 
 TRAJECTORY_RATE = 100.0
 MAX_LEAD_IN_S = 60.0   # a blend from the T-pose into the clip; minutes of it would be a mistake
@@ -171,12 +172,6 @@ def write_truth_csv(path, local_rot, root_pos, fps, t_session_start, motion_star
             f.write(",".join(vals) + "\n")
 
 
-def _same_file(a: Path, b: Path) -> bool:
-    if a.exists() and b.exists():
-        return os.path.samefile(a, b)
-    return os.path.realpath(a) == os.path.realpath(b)
-
-
 def _check_outputs(bvh_path, outputs: dict) -> None:
     """Every output is a new or regular file, none is the BVH being read, no two are one file:
     writing one would otherwise destroy the input or another output before it is used."""
@@ -185,10 +180,10 @@ def _check_outputs(bvh_path, outputs: dict) -> None:
     for i, (what, path) in enumerate(named):
         if path.exists() and not path.is_file():
             raise UsageError(f"{what} {path}: not a regular file (a folder or a device)")
-        if bvh_path is not None and _same_file(path, Path(bvh_path)):
+        if bvh_path is not None and same_file(path, Path(bvh_path)):
             raise UsageError(f"{what} {path} is the BVH clip this command reads: writing it would destroy it")
         for other, other_path in named[:i]:
-            if _same_file(path, other_path):
+            if same_file(path, other_path):
                 raise UsageError(f"{other} and {what} name the same file ({path})")
 
 
@@ -287,24 +282,9 @@ def load_truth(path) -> dict:
         return {k: z[k] for k in z.files}
 
 
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if not 0 <= value < 2 ** 64:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number from 0 to 2^64-1")
-    return value
-
-
-def _lead_in(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and 0.0 <= value <= MAX_LEAD_IN_S):
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number of seconds from 0 to {MAX_LEAD_IN_S:g}")
-    return value
+SEED = number_type(int, lambda v: 0 <= v < 2 ** 64, "a whole number from 0 to 2^64-1")
+LEAD_IN = number_type(float, lambda v: 0.0 <= v <= MAX_LEAD_IN_S,
+                      f"a number of seconds from 0 to {MAX_LEAD_IN_S:g}")
 
 
 def add_arguments(p=None):
@@ -315,10 +295,10 @@ def add_arguments(p=None):
     p.add_argument("--truth", help="pose truth .npz (default: CAPTURE.truth.npz)")
     p.add_argument("--truth-csv", help="pose truth as CSV (default: CAPTURE.truth.csv)")
     p.add_argument("--sensor-truth", help="per-sensor truth CSV from mocapctl (default: CAPTURE.sensors.csv)")
-    p.add_argument("--seed", type=_seed, default=1, help="noise and mounting draws (0 to 2^64-1)")
+    p.add_argument("--seed", type=SEED, default=1, help="noise and mounting draws (0 to 2^64-1)")
     p.add_argument("--world", choices=["nwu", "enu"], default="nwu")
     p.add_argument("--noise", choices=["realistic", "none"], default="realistic")
-    p.add_argument("--lead-in", type=_lead_in, default=1.0,
+    p.add_argument("--lead-in", type=LEAD_IN, default=1.0,
                    help=f"seconds of T-pose -> clip blend (0 to {MAX_LEAD_IN_S:g})")
     p.add_argument("--keep-trajectory", action="store_true", help="keep CAPTURE.trajectory.txt")
     return p

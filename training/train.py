@@ -34,7 +34,6 @@ training/results/loss.png.
 """
 from __future__ import annotations
 
-import argparse
 import io
 import json
 import math
@@ -51,7 +50,8 @@ import torch
 import torch.nn.functional as F
 
 from . import skeleton as sk
-from .cli import CommandError, UsageError
+from .cli import (NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, CommandError, UsageError,
+                  number_type)
 from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch, non_finite_tensors
 from .synthesis import Augmentation, synthesize, vary_motion
 
@@ -258,10 +258,10 @@ def check_finite_motions(motions, what: str) -> None:
     """A UsageError naming the first clip with NaN or inf values: one such clip makes the loss,
     and after one step every weight, NaN."""
     for m in motions:
-        for field_name in ("local_rot", "root_pos", "offsets"):
-            if not np.isfinite(getattr(m, field_name)).all():
-                raise UsageError(f"{what} clip {m.name}: its {field_name} holds NaN or inf values "
-                                 f"(a damaged source file?); remove or repair it")
+        field_name = m.non_finite_field()
+        if field_name:
+            raise UsageError(f"{what} clip {m.name}: its {field_name} holds NaN or inf values "
+                             f"(a damaged source file?); remove or repair it")
 
 
 def validation_set(motions, cfg: TrainConfig) -> list:
@@ -412,27 +412,37 @@ def load_checkpoint_file(path, device="cpu") -> dict:
         raise UsageError(f"{path} is not a PyTorch checkpoint ({str(e).splitlines()[0] if str(e) else type(e).__name__})") from e
 
 
+def require_pose_checkpoint(ck, path) -> None:
+    """A UsageError naming the file unless ck is a pose model checkpoint: a dict with a "model"
+    state dict and a "config"."""
+    if not isinstance(ck, dict) or not isinstance(ck.get("model"), dict) or not isinstance(ck.get("config"), dict):
+        raise UsageError(f"{path} is not a pose model checkpoint (no 'model' weights and 'config')")
+
+
+def require_finite_weights(state: dict, path, use: str) -> None:
+    """A UsageError naming the file when a state dict holds NaN or inf; `use`: what they spoil."""
+    bad = non_finite_tensors(state)
+    if bad:
+        raise UsageError(f"{path}: the weights hold NaN or inf ({bad}); {use}")
+
+
 def checkpoint_network(ck, path, device="cpu") -> PoseNet:
     """The PoseNet of a loaded checkpoint dict ("model" state dict + "config"), or a UsageError
     naming the file."""
-    if not isinstance(ck, dict) or not isinstance(ck.get("model"), dict) or not isinstance(ck.get("config"), dict):
-        raise UsageError(f"{path} is not a pose model checkpoint (no 'model' weights and 'config')")
-    net = PoseNet(checkpoint_model_config(ck, path)).to(device)
+    require_pose_checkpoint(ck, path)
+    net = PoseNet(checkpoint_model_config(ck["config"], path)).to(device)
     try:
         net.load_state_dict(ck["model"])
     except RuntimeError as e:
         raise UsageError(f"{path}: the weights do not fit its network config ({str(e).splitlines()[0]})") from e
-    bad = non_finite_tensors(net.state_dict())
-    if bad:
-        raise UsageError(f"{path}: the weights hold NaN or inf ({', '.join(bad[:3])}"
-                         f"{', ...' if len(bad) > 3 else ''}); the network would output NaN")
+    require_finite_weights(net.state_dict(), path, "the network would output NaN")
     return net
 
 
-def checkpoint_model_config(ck, path) -> ModelConfig:
-    """The ModelConfig of a loaded checkpoint, or a UsageError naming the file."""
+def checkpoint_model_config(config: dict, path) -> ModelConfig:
+    """The ModelConfig of a checkpoint's network config dict, or a UsageError naming the file."""
     try:
-        return ModelConfig.from_dict(ck["config"])
+        return ModelConfig.from_dict(config)
     except (ValueError, TypeError, AttributeError) as e:
         raise UsageError(f"{path}: invalid network config ({e})") from e
 
@@ -441,7 +451,7 @@ def _save(path: Path, net, opt, step, total, cfg, history, best, rng, batcher, s
     # The last line of defence: a NaN checkpoint would replace a good one and be exported.
     bad = non_finite_tensors(net.state_dict())
     if bad:
-        raise CommandError(f"step {step}: the weights hold NaN or inf ({', '.join(bad[:3])}); {path} "
+        raise CommandError(f"step {step}: the weights hold NaN or inf ({bad}); {path} "
                            f"not written (a learning rate that is too high?)")
     # The batcher's streams and the LSTM state they carry make a resumed run continue exactly
     # where this one stands (same batches, same recurrent state), not from fresh clips.
@@ -701,7 +711,7 @@ def saved_train_config(ck, path="the checkpoint") -> TrainConfig:
     the network's own config."""
     known = TrainConfig.__dataclass_fields__
     cfg = TrainConfig(**{k: v for k, v in (ck.get("train_config") or {}).items() if k in known})
-    mc = checkpoint_model_config(ck, path)
+    mc = checkpoint_model_config(ck["config"], path)
     cfg.anchored, cfg.wrist_sensor = bool(mc.anchored), mc.wrist_anchor
     cfg.size = next((n for n, c in SIZES.items() if _size_dims(c) == _size_dims(mc)), cfg.size)
     return cfg
@@ -812,26 +822,8 @@ def main(args) -> int:
     return 0
 
 
-def _number(convert, accepts, expected: str):
-    """An argparse type: the value converted, or ArgumentTypeError (exit 2 with the usage) when it
-    does not parse or is out of range; NaN and inf are never accepted."""
-    def parse(text):
-        try:
-            value = convert(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not {expected}") from None
-        if (isinstance(value, float) and not math.isfinite(value)) or not accepts(value):
-            raise argparse.ArgumentTypeError(f"{text!r} is not {expected}")
-        return value
-    return parse
-
-
-POSITIVE_INT = _number(int, lambda v: v >= 1, "a positive integer")
-NON_NEGATIVE_INT = _number(int, lambda v: v >= 0, "an integer >= 0")
-POSITIVE = _number(float, lambda v: v > 0, "a positive number")
-NON_NEGATIVE = _number(float, lambda v: v >= 0, "a number >= 0")
-PROBABILITY = _number(float, lambda v: 0 <= v <= 1, "a probability in [0, 1]")
-DROPOUT = _number(float, lambda v: 0 <= v < 1, "a dropout rate in [0, 1)")
+PROBABILITY = number_type(float, lambda v: 0 <= v <= 1, "a probability in [0, 1]")
+DROPOUT = number_type(float, lambda v: 0 <= v < 1, "a dropout rate in [0, 1)")
 
 
 def add_arguments(parser) -> None:

@@ -254,20 +254,23 @@ def test_resume_continues_with_the_checkpoints_own_options(tmp_path, monkeypatch
     assert (ck["config"]["anchored"], ck["config"]["wrist_anchor"], ck["config"]["dropout"]) == (False, "forearm", 0.2)
 
 
+def _nine_step_run(tmp_path, name, **kw):
+    """A tiny 9-step run in tmp_path/name whose weights depend on its steps alone: no wall-clock
+    budget, validation or periodic checkpoint in the way."""
+    return tr.TrainConfig(size="tiny", batch=3, window=40, lr=3e-3, warmup=2, steps=9,
+                          budget_minutes=1e6, ckpt_dir=str(tmp_path / name / "ck"),
+                          results_dir=str(tmp_path / name / "res"), progress=False,
+                          smoke=True, eval_every_s=1e9, ckpt_every_s=1e9, **kw)
+
+
 def test_a_run_stopped_and_resumed_ends_with_the_weights_of_an_uninterrupted_one(tmp_path):
     """--stop-after then --resume (a run split over sittings, e.g. short GPU leases) takes exactly
     the steps of an uninterrupted run: same batches, same LSTM state carried, same random draws."""
     train_m = _motions(4, 0)
 
-    def config(name, **kw):
-        return tr.TrainConfig(size="tiny", batch=3, window=40, lr=3e-3, warmup=2, steps=9,
-                              budget_minutes=1e6, ckpt_dir=str(tmp_path / name / "ck"),
-                              results_dir=str(tmp_path / name / "res"), progress=False,
-                              smoke=True, eval_every_s=1e9, ckpt_every_s=1e9, **kw)
-
-    whole = config("whole")
+    whole = _nine_step_run(tmp_path, "whole")
     assert tr.train(whole, train_m, [])["steps"] == 9
-    split = config("split", stop_after=4)
+    split = _nine_step_run(tmp_path, "split", stop_after=4)
     assert tr.train(split, train_m, [])["steps"] == 4
     resumed = replace(split, resume=True, stop_after=None)
     assert tr.train(resumed, train_m, [])["steps"] == 9
@@ -289,13 +292,7 @@ def test_ctrl_c_finishes_the_step_saves_and_resumes_exactly(tmp_path, monkeypatc
     from training.cli import CommandError
     train_m = _motions(4, 0)
 
-    def config(name, **kw):
-        return tr.TrainConfig(size="tiny", batch=3, window=40, lr=3e-3, warmup=2, steps=9,
-                              budget_minutes=1e6, ckpt_dir=str(tmp_path / name / "ck"),
-                              results_dir=str(tmp_path / name / "res"), progress=False,
-                              smoke=True, eval_every_s=1e9, ckpt_every_s=1e9, **kw)
-
-    tr.train(config("whole"), train_m, [])
+    tr.train(_nine_step_run(tmp_path, "whole"), train_m, [])
     calls = []
     real_next = tr.StreamBatcher.next
 
@@ -306,7 +303,7 @@ def test_ctrl_c_finishes_the_step_saves_and_resumes_exactly(tmp_path, monkeypatc
         return real_next(self)
 
     monkeypatch.setattr(tr.StreamBatcher, "next", next_with_ctrl_c)
-    cut = config("cut")
+    cut = _nine_step_run(tmp_path, "cut")
     with pytest.raises(CommandError, match="interrupted .* after step 4: .*last.pt saved"):
         tr.train(cut, train_m, [])
     monkeypatch.setattr(tr.StreamBatcher, "next", real_next)
