@@ -146,7 +146,10 @@ if [ -d "$ROOT/dotnet/Mocap.Imu.Core.Tests" ]; then
   fi
 fi
 
-if [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ] && command -v dotnet >/dev/null 2>&1; then
+if [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ] && ! command -v dotnet >/dev/null 2>&1; then
+  echo "=== C# syntax of the whole Unity package: dotnet SDK not found"
+  record "C# syntax (Unity package)" 0 1
+elif [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ]; then
   # The Unity glue cannot be compiled here (no UnityEngine assemblies): parse all of it instead.
   echo "=== C# syntax of the whole Unity package (C# 9, editor and player symbols)"
   log="$BUILD/syntax.log"

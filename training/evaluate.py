@@ -25,8 +25,9 @@ Metrics (field-notes section 1; definitions also in training/README.md):
               (TransPose's unit; the truth's own jitter is listed for reference)
   latency     ONNX Runtime per frame for one character, streaming T = 1 on one intra-op thread
               (mocapctl infer --stream --threads 1): p50 / p99 microseconds per call
-Writes OUT/evaluation.md (table + targets) and PNGs: per-joint angle error, error over time,
-drift vs window length.
+Writes OUT/evaluation.md (table, targets, per joint, per subject, hardest clips), OUT/clips.csv
+(every clip's angle and position error per method) and PNGs: per-joint error, error over time,
+drift vs window length, per-clip position error.
 """
 from __future__ import annotations
 
@@ -94,6 +95,7 @@ class Clip:
     imu_acceleration: np.ndarray   # (T,6,3)
     local_rot: np.ndarray          # (T,24,3,3) truth
     root_pos: np.ndarray           # (T,3) truth
+    subject: int = 0               # 0: unknown (a BVH folder without NN_MM names)
 
 
 def synthesize_clip(motion: sk.Motion, rng, wrist: str = "hand", noise: str = "realistic") -> Clip:
@@ -104,7 +106,8 @@ def synthesize_clip(motion: sk.Motion, rng, wrist: str = "hand", noise: str = "r
     return Clip(motion.name, float(sample.fps), np.asarray(sample.offsets, np.float64),
                 np.asarray(sample.imu_orientation, np.float32),
                 np.asarray(sample.imu_acceleration, np.float32),
-                np.asarray(sample.local_rot, np.float64), np.asarray(sample.root_pos, np.float64))
+                np.asarray(sample.local_rot, np.float64), np.asarray(sample.root_pos, np.float64),
+                int(motion.subject))
 
 
 # ------------------------------------------------------------------------------ predictors
@@ -255,6 +258,17 @@ def jitter(positions, fps):
 
 
 @dataclass
+class ClipScore:
+    """One clip's means over its frames (and joints), so a report can say where the error is."""
+    name: str
+    subject: int
+    frames: int
+    seconds: float
+    angle: float   # deg, mean over 24 joints
+    pos: float     # cm
+
+
+@dataclass
 class Accumulator:
     """Sums over all frames of all clips of one method."""
     frames: int = 0
@@ -267,6 +281,7 @@ class Accumulator:
     jitter_sum: float = 0.0
     jitter_frames: int = 0
     over_time: list = field(default_factory=list)     # per clip: (T,) mean angle error
+    per_clip: list = field(default_factory=list)      # per clip: ClipScore
 
     def add(self, clip: Clip, pred: Prediction):
         true_l = clip.local_rot
@@ -289,6 +304,8 @@ class Accumulator:
             self.jitter_sum += jitter(p_p, clip.fps) * (T - 3)
             self.jitter_frames += T - 3
         self.over_time.append(ang.mean(axis=1))
+        self.per_clip.append(ClipScore(clip.name, clip.subject, T, T / clip.fps,
+                                       float(ang.mean()), float(dist_cm.mean())))
 
     def summary(self) -> dict:
         n = max(self.frames, 1)
@@ -303,6 +320,7 @@ class Accumulator:
             out[f"drift_{w:g}s_n"] = len(v)
         out["drift_curve"] = {w: (float(np.mean(v)) if len(v) else float("nan"))
                               for w, v in sorted(self.drift_curve.items())}
+        out["per_clip"] = list(self.per_clip)
         return out
 
 
@@ -377,6 +395,71 @@ def _per_joint_table(results) -> list:
     return lines
 
 
+HARDEST_CLIPS = 10
+
+
+def _frame_mean(clips, key) -> float:
+    """A ClipScore field averaged over frames, as the headline figures are."""
+    return sum(getattr(c, key) * c.frames for c in clips) / max(sum(c.frames for c in clips), 1)
+
+
+def _per_clip_sections(results, model_name) -> list:
+    """Where the model's position error comes from: per subject, and the clips it does worst on
+    with what they add to the mean, so a missed target can be traced to kinds of motion."""
+    if not model_name or not results[model_name].get("per_clip"):
+        return []
+    clips = results[model_name]["per_clip"]
+    # The baseline beside the model shows whether a clip is hard for any method or for the model.
+    base = {c.name: c for c in results.get("baseline", {}).get("per_clip", [])} \
+        if model_name != "baseline" else {}
+    base_head = " baseline position (cm) |" if base else ""
+    frames = sum(c.frames for c in clips)
+    lines = []
+    subjects = sorted({c.subject for c in clips})
+    if len(subjects) > 1:
+        lines += ["", f"## Per subject ({model_name})", "",
+                  "| subject | clips | minutes | angle (deg) | position (cm) |" + base_head,
+                  "|---|---|---|---|---|" + "---|" * bool(base_head)]
+        for subj in subjects:
+            mine = [c for c in clips if c.subject == subj]
+            in_base = [base[c.name] for c in mine if c.name in base]
+            lines.append(f"| {subj if subj else 'unknown'} | {len(mine)} | {sum(c.seconds for c in mine) / 60:.1f} | "
+                         f"{_fmt(_frame_mean(mine, 'angle'))} | {_fmt(_frame_mean(mine, 'pos'))} |"
+                         + (f" {_fmt(_frame_mean(in_base, 'pos')) if in_base else '-'} |" if base else ""))
+    worst = sorted(clips, key=lambda c: c.pos, reverse=True)[:min(HARDEST_CLIPS, len(clips) - 1)]
+    if worst:
+        worst_names = {c.name for c in worst}
+        rest_pos = _frame_mean([c for c in clips if c.name not in worst_names], "pos")
+        share = 100.0 * sum(c.frames for c in worst) / frames
+        lines += ["", f"## Hardest clips ({model_name}, by position error)", "",
+                  f"These {len(worst)} clips are {share:.1f} % of the frames; without them the mean "
+                  f"position error would be {rest_pos:.2f} cm instead of {results[model_name]['pos']:.2f}. "
+                  "Every clip's figures are in `clips.csv`.", "",
+                  "| clip | subject | seconds | angle (deg) | position (cm) |" + base_head,
+                  "|---|---|---|---|---|" + "---|" * bool(base_head)]
+        for c in worst:
+            b = base.get(c.name)
+            lines.append(f"| {c.name} | {c.subject if c.subject else '-'} | {c.seconds:.1f} | {_fmt(c.angle)} | "
+                         f"{_fmt(c.pos)} |" + (f" {_fmt(b.pos) if b else '-'} |" if base else ""))
+    return lines
+
+
+def write_clip_table(out_dir, results) -> Path:
+    """clips.csv: one row per clip, angle and position error of every method."""
+    import csv
+    names = [n for n in results if results[n].get("per_clip")]
+    path = Path(out_dir) / "clips.csv"
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["clip", "subject", "seconds"] + [f"{n} {k}" for n in names
+                                                      for k in ("angle (deg)", "position (cm)")])
+        for row in zip(*(results[n]["per_clip"] for n in names)):
+            c = row[0]
+            w.writerow([c.name, c.subject, f"{c.seconds:.3f}"] +
+                       [f"{v:.4f}" for r in row for v in (r.angle, r.pos)])
+    return path
+
+
 _WRIST_WORDS = {"hand": "back of the hands", "forearm": "forearms (wrist straps)"}
 
 
@@ -435,6 +518,7 @@ def write_report(out_dir, results, meta, latency, params, truth_jit):
                      f"while measured) | {'yes' if p99_ms < TARGETS['latency_ms'] else 'NO'} (p99), "
                      f"{'yes' if latency['p50_us'] / 1000 < TARGETS['latency_ms'] else 'NO'} (p50) |")
     lines += _per_joint_table(results)
+    lines += _per_clip_sections(results, model_name or ("baseline" if base else None))
     lines += ["", "## Definitions", "",
               "- angle: angle of the relative rotation between predicted and true LOCAL joint "
               "rotations (joint 0 = global pelvis). \"DIP 15\" leaves out the pelvis, ankles, feet, "
@@ -450,7 +534,8 @@ def write_report(out_dir, results, meta, latency, params, truth_jit):
               "at rest, no translation.",
               f"- latency: `mocapctl infer --stream --threads 1` on {meta.get('latency_frames', 1800)} "
               "frames, the engine's ONNX Runtime module, first call (warm-up) excluded.", "",
-              "Plots: `per_joint_error.png`, `error_over_time.png`, `drift.png`."]
+              "Plots: `per_joint_error.png`, `error_over_time.png`, `drift.png`, "
+              "`per_clip_error.png`; every clip's errors: `clips.csv`."]
     (out_dir / "evaluation.md").write_text("\n".join(lines) + "\n")
     return out_dir / "evaluation.md"
 
@@ -502,6 +587,21 @@ def write_plots(out_dir, results, accs, clips):
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(out_dir / "drift.png", dpi=110)
+    plt.close(fig)
+    # Per-clip position error, clips sorted by it, each as wide as its share of the frames: how
+    # much of the data is above the target, and by how much.
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for n in names:
+        per_clip = sorted(results[n]["per_clip"], key=lambda c: c.pos)
+        share = np.cumsum([0] + [c.frames for c in per_clip]) / max(sum(c.frames for c in per_clip), 1)
+        ax.stairs([c.pos for c in per_clip], 100.0 * share, baseline=None, label=n)
+    ax.axhline(TARGETS["pos"], color="k", ls="--", lw=1, label=f"target {TARGETS['pos']:g} cm")
+    ax.set_xlabel("share of the frames, clips sorted by error (%)")
+    ax.set_ylabel("clip's mean position error (cm)")
+    ax.set_title("Position error per clip")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out_dir / "per_clip_error.png", dpi=110)
     plt.close(fig)
 
 
@@ -572,6 +672,7 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
             "checkpoint": _shown_path(checkpoint) if checkpoint else None, "torch_onnx_diff": diff}
     tj = truth_jitter(clips)
     report = write_report(out_dir, results, meta, lat, params, tj)
+    write_clip_table(out_dir, results)
     write_plots(out_dir, results, accs, clips)
     return {"results": results, "latency": lat, "params": params, "report": report,
             "truth_jitter": tj}

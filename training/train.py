@@ -53,6 +53,7 @@ from . import skeleton as sk
 from .cli import (NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, CommandError, UsageError,
                   number_type)
 from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch, non_finite_tensors
+from .rarity import clip_rarity
 from .synthesis import Augmentation, synthesize, vary_motion
 
 REPO = Path(__file__).resolve().parents[1]
@@ -82,6 +83,7 @@ class TrainConfig:
     w_contact: float = 0.5
     arm_swap: float = 0.0             # Augmentation.arm_swap / arm_jitter_deg (motion variety)
     arm_jitter_deg: float = 0.0
+    rare_boost: float = 0.0           # clips drawn by length x rarity^rare_boost (rarity.py)
     rot_loss: str = "chordal"         # "chordal": Frobenius distance per joint (~ angle, like the
                                       # metric); "squared": its square (punishes outliers more)
     dropout: float | None = 0.1       # PoseNet dropout in training (None: the checkpoint's own)
@@ -138,12 +140,16 @@ class StreamBatcher:
     """B streams, each playing an augmented clip window by window (see module docstring)."""
 
     def __init__(self, motions, batch: int, window: int, rng: np.random.Generator,
-                 augment: Augmentation | None = Augmentation(), wrist: str = "hand"):
+                 augment: Augmentation | None = Augmentation(), wrist: str = "hand",
+                 rare_boost: float = 0.0):
         self.motions = [m for m in motions if m.num_frames >= window + 1]
         if not self.motions:
             raise UsageError(f"no training clip has more than {window} frames (60 Hz)")
         lengths = np.array([m.num_frames for m in self.motions], dtype=np.float64)
-        self.p = lengths / lengths.sum()
+        # Clips are drawn by length, or with rare poses more often (rarity.py; --rare-boost).
+        self.rarity = clip_rarity(self.motions) if rare_boost > 0 else np.ones(len(lengths))
+        weights = lengths * self.rarity ** rare_boost
+        self.p = weights / weights.sum()
         self.total_frames = int(lengths.sum())
         self.batch, self.window, self.rng, self.augment = batch, window, rng, augment
         self.wrist = wrist
@@ -189,6 +195,16 @@ class StreamBatcher:
         batch = {k: torch.from_numpy(np.stack(v)) for k, v in out.items()}
         batch["offsets"] = torch.from_numpy(np.stack(offsets))
         return batch, torch.from_numpy(reset)
+
+
+def rarity_summary(batcher: StreamBatcher) -> str:
+    """What the boost does to the draw: the rarest tenth of the frames, by clip, before and after."""
+    lengths = np.array([m.num_frames for m in batcher.motions], np.float64)
+    order = np.argsort(-batcher.rarity)
+    rare = order[:max(1, int(np.searchsorted(np.cumsum(lengths[order]), 0.1 * lengths.sum())) + 1)]
+    return (f"the clips with the rarest {100 * lengths[rare].sum() / lengths.sum():.0f} % of the frames "
+            f"get {100 * batcher.p[rare].sum():.0f} % of the draws; rarity "
+            f"{batcher.rarity.min():.2f} to {batcher.rarity.max():.2f}")
 
 
 def _procedural_motions(n: int, seconds: float, seed: int) -> list:
@@ -541,7 +557,9 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             print("train: the wrist sensors move from the hands to the forearms (wrist straps)")
     batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng,
                             Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg),
-                            wrist=cfg.wrist_sensor)
+                            wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost)
+    if cfg.rare_boost > 0:
+        print(f"train: rare poses boosted ({rarity_summary(batcher)})")
     val = validation_set(val_motions or [], cfg) if val_motions else []
     steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
     print(f"train: {len(batcher.motions)} clips, {batcher.total_frames} frames "
@@ -777,7 +795,7 @@ def config_from_args(args) -> TrainConfig:
     explicit = set()
     for k in ("budget_minutes", "steps", "stop_after", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
-              "arm_jitter_deg", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor"):
+              "arm_jitter_deg", "rare_boost", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -855,6 +873,9 @@ def add_arguments(parser) -> None:
                         help="probability that a clip's arms move as in another clip (default 0)")
     parser.add_argument("--arm-jitter", dest="arm_jitter_deg", type=NON_NEGATIVE, default=None,
                         help="slow random shoulder offsets, per-axis sigma in degrees (default 0)")
+    parser.add_argument("--rare-boost", dest="rare_boost", type=NON_NEGATIVE, default=None,
+                        help="draw clips by length x rarity^A of their poses (training/rarity.py): "
+                             "rare motion more often (default 0: by length)")
     parser.add_argument("--wrist-sensor", dest="wrist_sensor", default=None, choices=["hand", "forearm"],
                         help="where the synthesised wrist sensors are: hand (back of the hands, the "
                              "default and the shipped model's) or forearm (wrist straps; a hand-trained "

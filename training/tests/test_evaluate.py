@@ -1,6 +1,7 @@
 """training/evaluate.py: metrics on known cases, the baseline, and the whole run on procedural
 fixtures with a tiny PyTorch model and its ONNX export on the real ONNX Runtime."""
 import importlib.util
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -131,8 +132,56 @@ def test_evaluate_end_to_end(tmp_path):
     assert len(wrist.split("|")) == 2 + 1 + 2 * len(res)                       # joint + 2 per method
     if models:
         assert "(the same model)" in text and "different models" not in text
-    for png in ("per_joint_error.png", "error_over_time.png", "drift.png"):
+    # the model's hardest clip, with the baseline's figure beside it; one subject: no subject table
+    model = "ONNX fp32" if models else "PyTorch fp32"
+    hardest = max(res[model]["per_clip"], key=lambda c: c.pos)
+    base_of = {c.name: c.pos for c in res["baseline"]["per_clip"]}
+    assert f"## Hardest clips ({model}, by position error)" in text and "## Per subject" not in text
+    assert f"| {hardest.name} | - | 6.0 | {hardest.angle:.2f} | {hardest.pos:.2f} | {base_of[hardest.name]:.2f} |" in text
+    for png in ("per_joint_error.png", "error_over_time.png", "drift.png", "per_clip_error.png"):
         assert (out / png).stat().st_size > 1000
+
+
+def test_per_clip_scores_add_up_to_the_headline_and_name_the_hardest_clip(tmp_path):
+    """The per-clip figures are frame-weighted parts of the headline means; the report's hardest
+    clip and the per-subject rows come from them, and clips.csv holds every clip."""
+    import csv
+    # The baseline leaves the thighs at rest: a squat's knees and feet are far off.
+    kinds = ["arm_swing", "squat", "walk"]
+    motions = [replace(procedural.make_motion(k, 3.0 + i, seed=i), name=f"{k}_clip", subject=10 + i % 2)
+               for i, k in enumerate(kinds)]
+    out = tmp_path / "res"
+    r = ev.evaluate(motions, [], None, out, seed=2, latency=False, source="procedural")
+    base = r["results"]["baseline"]
+    scores = base["per_clip"]
+    assert [c.name for c in scores] == [m.name for m in motions]
+    assert [c.frames for c in scores] == [m.num_frames for m in motions]
+    assert ev._frame_mean(scores, "pos") == pytest.approx(base["pos"], rel=1e-9)
+    assert ev._frame_mean(scores, "angle") == pytest.approx(base["angle_all"], rel=1e-9)
+    hardest = max(scores, key=lambda c: c.pos)
+    assert hardest.name == "squat_clip"
+    # one clip's figure recomputed from its own prediction
+    clip = ev.synthesize_clip(motions[0], np.random.default_rng(2))
+    _, p_pred = ev.root_aligned_positions(ev.predict_baseline(clip).local_rot, clip.offsets)
+    _, p_true = ev.root_aligned_positions(clip.local_rot, clip.offsets)
+    assert scores[0].pos == pytest.approx(100 * np.linalg.norm(p_pred - p_true, axis=-1).mean(), rel=1e-9)
+    text = (out / "evaluation.md").read_text()
+    assert "## Per subject (baseline)" in text and "## Hardest clips (baseline" in text
+    rows = [line for line in text.split("## Hardest clips")[1].splitlines() if line.startswith("| ")]
+    assert rows[1].startswith(f"| {hardest.name} | ")          # after the header, worst first
+    assert len(rows) == 1 + len(motions) - 1                      # all but one clip, at most 10
+    # "without them": the one clip left is the easiest
+    easiest = min(scores, key=lambda c: c.pos)
+    assert f"would be {easiest.pos:.2f} cm instead of {base['pos']:.2f}" in text
+    subj10 = [c for c in scores if c.subject == 10]
+    row10 = next(line for line in text.split("## Per subject")[1].splitlines() if line.startswith("| 10 |"))
+    assert f"| {ev._frame_mean(subj10, 'pos'):.2f} |" in row10
+    with open(out / "clips.csv") as f:
+        table = list(csv.DictReader(f))
+    assert [t["clip"] for t in table] == [m.name for m in motions]
+    for t, c in zip(table, scores):
+        assert float(t["baseline position (cm)"]) == pytest.approx(c.pos, abs=1e-4)
+        assert int(t["subject"]) == c.subject
 
 
 def test_a_checkpoint_that_is_not_the_onnx_model_is_flagged(tmp_path, capsys):

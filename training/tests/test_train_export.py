@@ -76,11 +76,29 @@ def test_command_line_options_reach_the_training_config():
     parser = argparse.ArgumentParser()
     tr.add_arguments(parser)
     cfg = tr.config_from_args(parser.parse_args(
-        ["--pos-weight", "30", "--arm-swap", "0.5", "--arm-jitter", "12", "--lr", "2.5e-4", "--seed", "3"]))
-    assert (cfg.w_pos, cfg.arm_swap, cfg.arm_jitter_deg, cfg.lr, cfg.seed) == (30.0, 0.5, 12.0, 2.5e-4, 3)
+        ["--pos-weight", "30", "--arm-swap", "0.5", "--arm-jitter", "12", "--lr", "2.5e-4", "--seed", "3",
+         "--rare-boost", "0.5"]))
+    assert (cfg.w_pos, cfg.arm_swap, cfg.arm_jitter_deg, cfg.lr, cfg.seed, cfg.rare_boost) == \
+        (30.0, 0.5, 12.0, 2.5e-4, 3, 0.5)
     default = tr.config_from_args(parser.parse_args([]))
     assert default == tr.TrainConfig()
     assert tr.config_from_args(parser.parse_args(["--no-anchor"])).anchored is False
+
+
+def test_rare_boost_draws_the_clip_with_rare_poses_more_often():
+    from training import procedural
+    walks = [procedural.make_motion("walk", 6.0, seed=i, name=f"walk{i}") for i in range(5)]
+    squat = procedural.make_motion("squat", 6.0, seed=9, name="squat")
+    motions = walks + [squat]
+    plain = tr.StreamBatcher(motions, batch=2, window=30, rng=np.random.default_rng(0))
+    boosted = tr.StreamBatcher(motions, batch=2, window=30, rng=np.random.default_rng(0), rare_boost=1.0)
+    lengths = np.array([m.num_frames for m in motions], np.float64)
+    np.testing.assert_allclose(plain.p, lengths / lengths.sum())
+    np.testing.assert_allclose(boosted.p, lengths * boosted.rarity / (lengths * boosted.rarity).sum())
+    assert boosted.p[-1] > 1.5 * plain.p[-1] and all(boosted.p[:-1] < plain.p[:-1])
+    drawn = [boosted.motions[int(boosted.rng.choice(len(motions), p=boosted.p))].name for _ in range(400)]
+    assert drawn.count("squat") > 1.3 * 400 * plain.p[-1]
+    assert "rarest" in tr.rarity_summary(boosted)
 
 
 def test_stream_batcher_carries_state_and_resets_on_new_clips():
@@ -537,7 +555,8 @@ def test_training_stops_at_a_non_finite_loss_and_saves_no_nan_weights(tmp_path, 
     "--batch 0", "--batch -1", "--window 0", "--window -5", "--lr nan", "--lr -1", "--lr 0", "--dropout 2",
     "--dropout 1", "--dropout -0.1", "--seed -1", "--steps 0", "--steps -1", "--budget-minutes -1",
     "--budget-minutes inf", "--stop-after -3", "--stop-after 0", "--arm-swap 5", "--arm-jitter -1",
-    "--max-clips -1", "--max-clips 0", "--pos-weight nan", "--pos-weight -2", "--steps 2.5"])
+    "--max-clips -1", "--max-clips 0", "--pos-weight nan", "--pos-weight -2", "--steps 2.5",
+    "--rare-boost -1", "--rare-boost nan"])
 def test_bad_numeric_training_options_are_usage_errors(option, capsys):
     with pytest.raises(SystemExit) as e:
         _cli(option.split())

@@ -6,7 +6,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -16,6 +18,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include "../tools/mocapctl_options.h"
 #include "e2e_support.h"
 #include "test_support.h"
 
@@ -337,6 +340,41 @@ TEST(Mocapctl, EveryOptionInTheUsageTextIsAccepted)
         EXPECT_EQ(r.output.find("has no option"), std::string::npos) << p.first << " " << p.second
                                                                       << "\n" << r.output;
     }
+}
+
+// ... and every option a command accepts is one its usage text shows: none is hidden from users.
+TEST(Mocapctl, EveryAcceptedOptionIsInTheUsageText)
+{
+    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " --help 2>/dev/null)");
+    ASSERT_EQ(help.exit_code, 0);
+    // The usage text's options per command, keyed as the option table is ("bench decode" and
+    // "bench" for the model benches).
+    std::map<std::string, std::set<std::string>> shown;
+    std::string command;
+    std::istringstream lines(help.output);
+    const std::regex option("--[a-z][a-z-]*");
+    for (std::string line; std::getline(lines, line);) {
+        const size_t at = line.find("mocapctl ");
+        if (at != std::string::npos) {
+            std::istringstream words(line.substr(at + 9));
+            std::string first, second;
+            words >> first >> second;
+            command = first == "bench" && second.rfind("decode", 0) == 0 ? "bench decode" : first;
+        }
+        for (std::sregex_iterator it(line.begin(), line.end(), option), end; it != end; ++it)
+            shown[command].insert(it->str());
+    }
+    size_t checked = 0;
+    for (const auto &entry : mocapctl_command_options) {
+        std::istringstream names(entry.options);
+        for (std::string name; names >> name; ++checked) {
+            if (name.back() == '=') name.pop_back();
+            EXPECT_EQ(shown[entry.command].count(name), 1u)
+                << "mocapctl " << entry.command << " accepts " << name
+                << " but its usage text does not show it:\n" << help.output;
+        }
+    }
+    EXPECT_GT(checked, 50u);
 }
 
 // A command blocked in I/O (here: opening a named pipe nobody reads) cannot act on the first

@@ -1,30 +1,12 @@
-/* mocapctl: the engine without Unity.
- *   mocapctl synth   --out CAPTURE [--truth CSV] [--motion mixed] [--seconds 20] [--world nwu|enu]
- *                    [--noise none|realistic] [--seed N] [--corrupt P] [--dropout P]
- *                    [--trajectory FILE]   (motion from a file, see docs/synth-trajectory.md)
- *   mocapctl replay  CAPTURE [--truth CSV] [--calibration FILE | --prelude H,S,T]
- *                    [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]
- *   mocapctl replay  CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]
- *                    [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]
- *                    [--smoothing HZ[,BETA]]
- *                    (with the pose model: decode -> filter -> calibrate -> model -> drift;
- *                    used when --model, --out, --json, --pose-csv or a pose truth is given;
- *                    default model: the shipped fp32 one)
- *   mocapctl live    --port DEV [--baud 460800] [--record CAPTURE] [--seconds N] [--model M | --pose]
- *                    [--smoothing HZ[,BETA]]
- *   mocapctl record  --port DEV --out CAPTURE [--baud 460800] [--seconds N]
- *   mocapctl stream  --vmc HOST:PORT [--vmc HOST2:PORT2 ...] (--replay CAPTURE [--replay C2 ...]
- *                    [--realtime] [--speed X] | --port DEV [--baud B]) [--model M] [--rate HZ]
- *                    [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]
- *                    (poses -> VMC protocol, character i -> i-th --vmc)
- * --smoothing: the solver's one-euro output filter, cut-off at rest (Hz) and its rise per rad/s
- *              of joint speed; default 1,6; 0 = the model's raw output.
- *   mocapctl bench   decode [--seconds S]
- *   mocapctl bench   pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]
- *                    [--tip-model F] [--max-characters N]                     (tools/bench.c)
- *   mocapctl infer   --model M.onnx --input IN --output OUT [--stream | --frames T] (tools/infer.c)
- *   mocapctl model-info M.onnx
- *   mocapctl version
+/* mocapctl: the engine without Unity. Its commands and their options are print_usage's text
+ * (`mocapctl --help`); the options each accepts are mocapctl_options.h. Beyond that text:
+ *   replay runs the pose model (decode -> filter -> calibrate -> model -> drift) when --model,
+ *     --out, --json, --pose-csv or a pose truth is given; default model: the shipped fp32 one.
+ *   synth --trajectory takes motion from a file (docs/synth-trajectory.md).
+ *   stream sends character i's poses to the i-th --vmc.
+ *   --smoothing: the solver's one-euro output filter, cut-off at rest (Hz) and its rise per
+ *     rad/s of joint speed; default 1,6; 0 = the model's raw output.
+ *   bench: tools/bench.c; infer, model-info: tools/infer.c.
  */
 #include <errno.h>
 #include <math.h>
@@ -48,6 +30,7 @@
 #include "capture_file.h"
 #include "mocap_imu.h"
 #include "mocap_math.h"
+#include "mocapctl_options.h"
 #include "platform.h"
 #include "synth.h"
 
@@ -91,14 +74,16 @@ static int print_usage(FILE *to, int status)
             "                 [--smoothing HZ[,BETA]]\n"
             "  mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S]\n"
             "  mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...] [--realtime]\n"
-            "                 [--speed X] | --port DEV [--baud B]) [--model M] [--rate HZ] [--seconds S]\n"
-            "                 [--allow-remote] [--smoothing HZ[,BETA]]\n"
+            "                 [--speed X] [--prelude H,S,T] | --port DEV [--baud B]) [--model M]\n"
+            "                 [--rate HZ] [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]\n"
             "  mocapctl bench decode [--seconds S]\n"
             "  mocapctl bench pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]\n"
-            "                 [--tip-model F] [--max-characters N]\n"
+            "                 [--tip-model F] [--max-characters N] [--latency-seconds S]\n"
+            "                 [--tip-seconds S]\n"
             "  mocapctl infer --model M.onnx --input IN --output OUT [--frames T | --stream] [--batch B]\n"
             "                 [--threads N] [--opt 0-3] [--provider cpu|cuda] [--repeat R]\n"
-            "  mocapctl model-info M.onnx\n"
+            "                 [--ort LIBONNXRUNTIME]\n"
+            "  mocapctl model-info M.onnx [--ort LIBONNXRUNTIME]\n"
             "  mocapctl version\n");
     return status;
 }
@@ -1826,34 +1811,14 @@ done:
 
 /* ---------------------------------------------------------------------------------------- */
 
-/* The options each command takes, as the usage text lists them ("--name=" takes a value):
- * anything else that starts with "--" is refused before the command runs. */
-static const struct {
-    const char *command;
-    const char *options;
-} command_options[] = {
-    {"synth", "--out= --truth= --motion= --seconds= --world= --noise= --seed= --corrupt= "
-              "--dropout= --trajectory="},
-    {"replay", "--truth= --calibration= --prelude= --save-calibration= --csv= --realtime --rate= "
-               "--model= --out= --bvh-order= --json= --pose-csv= --smoothing="},
-    {"live", "--port= --baud= --record= --seconds= --model= --pose --smoothing="},
-    {"record", "--port= --out= --baud= --seconds="},
-    {"stream", "--vmc= --replay= --realtime --speed= --prelude= --port= --baud= --model= --rate= "
-               "--seconds= --allow-remote --smoothing="},
-    {"bench decode", "--seconds="},
-    {"bench", "--model= --seconds= --latency-seconds= --tip-seconds= --threads= "
-              "--max-characters= --tip-model="},
-    {"infer", "--model= --input= --output= --frames= --stream --batch= --threads= --opt= "
-              "--provider= --repeat= --ort="},
-    {"model-info", "--ort="},
-    {"version", ""},
-};
 
 /* The option list of `command` (NULL for an unknown command). */
 static const char *options_of(const char *command)
 {
-    for (size_t i = 0; i < sizeof command_options / sizeof command_options[0]; ++i)
-        if (strcmp(command_options[i].command, command) == 0) return command_options[i].options;
+    const size_t count = sizeof mocapctl_command_options / sizeof mocapctl_command_options[0];
+    for (size_t i = 0; i < count; ++i)
+        if (strcmp(mocapctl_command_options[i].command, command) == 0)
+            return mocapctl_command_options[i].options;
     return NULL;
 }
 
