@@ -540,6 +540,17 @@ def write_report(out_dir, results, meta, latency, params, truth_jit):
     return out_dir / "evaluation.md"
 
 
+def _finish_plot(fig, ax, xlabel, ylabel, title, path):
+    import matplotlib.pyplot as plt
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def write_plots(out_dir, results, accs, clips):
     import matplotlib
     matplotlib.use("Agg")
@@ -569,25 +580,15 @@ def write_plots(out_dir, results, accs, clips):
     for n in names:
         e = accs[n].over_time[longest]
         ax.plot(np.arange(len(e)) / clips[longest].fps, e, label=n, lw=1)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("mean angle error over joints (deg)")
-    ax.set_title(f"Error over time, clip {clips[longest].name}")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out_dir / "error_over_time.png", dpi=110)
-    plt.close(fig)
+    _finish_plot(fig, ax, "time (s)", "mean angle error over joints (deg)",
+                 f"Error over time, clip {clips[longest].name}", out_dir / "error_over_time.png")
     # Drift vs window length
     fig, ax = plt.subplots(figsize=(6, 4))
     for n in names:
         curve = results[n]["drift_curve"]
         ax.plot(list(curve), list(curve.values()), marker="o", label=n)
-    ax.set_xlabel("window (s)")
-    ax.set_ylabel("mean root drift (m)")
-    ax.set_title("Root drift vs window length")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out_dir / "drift.png", dpi=110)
-    plt.close(fig)
+    _finish_plot(fig, ax, "window (s)", "mean root drift (m)", "Root drift vs window length",
+                 out_dir / "drift.png")
     # Per-clip position error, clips sorted by it, each as wide as its share of the frames: how
     # much of the data is above the target, and by how much.
     fig, ax = plt.subplots(figsize=(8, 4))
@@ -596,13 +597,8 @@ def write_plots(out_dir, results, accs, clips):
         share = np.cumsum([0] + [c.frames for c in per_clip]) / max(sum(c.frames for c in per_clip), 1)
         ax.stairs([c.pos for c in per_clip], 100.0 * share, baseline=None, label=n)
     ax.axhline(TARGETS["pos"], color="k", ls="--", lw=1, label=f"target {TARGETS['pos']:g} cm")
-    ax.set_xlabel("share of the frames, clips sorted by error (%)")
-    ax.set_ylabel("clip's mean position error (cm)")
-    ax.set_title("Position error per clip")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out_dir / "per_clip_error.png", dpi=110)
-    plt.close(fig)
+    _finish_plot(fig, ax, "share of the frames, clips sorted by error (%)",
+                 "clip's mean position error (cm)", "Position error per clip", out_dir / "per_clip_error.png")
 
 
 # ------------------------------------------------------------------------------ driver
