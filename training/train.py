@@ -280,6 +280,21 @@ def check_finite_motions(motions, what: str) -> None:
                              f"(a damaged source file?); remove or repair it")
 
 
+# Faster than any sprinter's pelvis (~12 m/s at the peak): a root that moves this fast between two
+# frames is a capture glitch (a few CMU clips jump by up to 1.2 m in one frame), and its velocity
+# would be a huge outlier in the root-velocity loss.
+MAX_ROOT_SPEED = 12.0   # m/s
+
+
+def without_root_jumps(motions) -> tuple:
+    """(the motions whose root never moves faster than MAX_ROOT_SPEED, the names of the others)."""
+    kept, dropped = [], []
+    for m in motions:
+        speed = np.linalg.norm(np.diff(np.asarray(m.root_pos, np.float64), axis=0), axis=-1) * m.fps
+        (dropped if speed.size and speed.max() > MAX_ROOT_SPEED else kept).append(m)
+    return kept, [m.name for m in dropped]
+
+
 def validation_set(motions, cfg: TrainConfig) -> list:
     """Deterministic: evenly spaced clips, no augmentation, at most val_max_frames each."""
     if len(motions) > cfg.val_clips:
@@ -523,6 +538,12 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         motions, val_motions = load_data(cfg)
     check_finite_motions(motions, "training")
     check_finite_motions(val_motions or [], "validation")
+    motions, jumping = without_root_jumps(motions)
+    if jumping:   # validation keeps every clip: it measures, it does not teach
+        print(f"train: {len(jumping)} clips left out, their root jumps faster than {MAX_ROOT_SPEED:g} m/s "
+              f"(capture glitches): {', '.join(jumping[:10])}{' ...' if len(jumping) > 10 else ''}")
+        if not motions:
+            raise UsageError("every training clip has root jumps; nothing left to train on")
     step, total, history, best = 0, cfg.steps, {"train": [], "val": []}, None
     if ck is not None:
         # The network exactly as saved: its anchoring, wrist placement and dropout are the run's

@@ -596,3 +596,26 @@ def test_export_refuses_non_finite_weights_before_writing_anything(tmp_path):
     for key, value in (("layers", 0), ("embed", "16"), ("dropout", 1.5), ("head", 2.5)):
         with pytest.raises(ValueError, match=key):
             ModelConfig.from_dict(dict(ModelConfig().to_dict(), **{key: value}))
+
+
+def _with_root_jump(motion, at, jump_m):
+    """The motion with its root moved by jump_m metres between frames at-1 and at (a glitch)."""
+    root = motion.root_pos.copy()
+    root[at:, 0] += jump_m
+    return sk.Motion(motion.name + "_jump", motion.subject, motion.fps, motion.local_rot, root, motion.offsets)
+
+
+def test_clips_whose_root_jumps_are_left_out_of_training_only(tmp_path, capsys):
+    clean = _motions(3, 0)
+    # 0.3 m in one frame at 60 Hz is 18 m/s; a walk's own speed (~1.4 m/s) stays in
+    glitch = _with_root_jump(clean[0], 40, 0.3)
+    kept, dropped = tr.without_root_jumps(clean + [glitch])
+    assert [m.name for m in kept] == [m.name for m in clean] and dropped == [glitch.name]
+    assert tr.without_root_jumps([_with_root_jump(clean[0], 40, 0.19)])[1] == []   # 11.4 m/s
+    s = tr.train(_tiny_config(tmp_path), clean + [glitch], [glitch])
+    out = capsys.readouterr().out
+    assert f"1 clips left out, their root jumps faster than 12 m/s (capture glitches): {glitch.name}" in out
+    assert s["train_clips"] == len(clean)
+    from training.cli import UsageError
+    with pytest.raises(UsageError, match="every training clip has root jumps"):
+        tr.train(_tiny_config(tmp_path / "b"), [glitch], clean[:1])
