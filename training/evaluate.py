@@ -412,35 +412,37 @@ def _per_clip_sections(results, model_name) -> list:
     # The baseline beside the model shows whether a clip is hard for any method or for the model.
     base = {c.name: c for c in results.get("baseline", {}).get("per_clip", [])} \
         if model_name != "baseline" else {}
-    base_head = " baseline position (cm) |" if base else ""
-    frames = sum(c.frames for c in clips)
+
+    def base_cell(text) -> str:   # the baseline's column, where there is one
+        return f" {text} |" if base else ""
+
     lines = []
     subjects = sorted({c.subject for c in clips})
     if len(subjects) > 1:
         lines += ["", f"## Per subject ({model_name})", "",
-                  "| subject | clips | minutes | angle (deg) | position (cm) |" + base_head,
-                  "|---|---|---|---|---|" + "---|" * bool(base_head)]
+                  "| subject | clips | minutes | angle (deg) | position (cm) |" + base_cell("baseline position (cm)"),
+                  "|---|---|---|---|---|" + base_cell("---")]
         for subj in subjects:
             mine = [c for c in clips if c.subject == subj]
             in_base = [base[c.name] for c in mine if c.name in base]
             lines.append(f"| {subj if subj else 'unknown'} | {len(mine)} | {sum(c.seconds for c in mine) / 60:.1f} | "
                          f"{_fmt(_frame_mean(mine, 'angle'))} | {_fmt(_frame_mean(mine, 'pos'))} |"
-                         + (f" {_fmt(_frame_mean(in_base, 'pos')) if in_base else '-'} |" if base else ""))
+                         + base_cell(_fmt(_frame_mean(in_base, 'pos')) if in_base else '-'))
     worst = sorted(clips, key=lambda c: c.pos, reverse=True)[:min(HARDEST_CLIPS, len(clips) - 1)]
     if worst:
         worst_names = {c.name for c in worst}
         rest_pos = _frame_mean([c for c in clips if c.name not in worst_names], "pos")
-        share = 100.0 * sum(c.frames for c in worst) / frames
+        share = 100.0 * sum(c.frames for c in worst) / sum(c.frames for c in clips)
         lines += ["", f"## Hardest clips ({model_name}, by position error)", "",
                   f"These {len(worst)} clips are {share:.1f} % of the frames; without them the mean "
                   f"position error would be {rest_pos:.2f} cm instead of {results[model_name]['pos']:.2f}. "
                   "Every clip's figures are in `clips.csv`.", "",
-                  "| clip | subject | seconds | angle (deg) | position (cm) |" + base_head,
-                  "|---|---|---|---|---|" + "---|" * bool(base_head)]
+                  "| clip | subject | seconds | angle (deg) | position (cm) |" + base_cell("baseline position (cm)"),
+                  "|---|---|---|---|---|" + base_cell("---")]
         for c in worst:
             b = base.get(c.name)
             lines.append(f"| {c.name} | {c.subject if c.subject else '-'} | {c.seconds:.1f} | {_fmt(c.angle)} | "
-                         f"{_fmt(c.pos)} |" + (f" {_fmt(b.pos) if b else '-'} |" if base else ""))
+                         f"{_fmt(c.pos)} |" + base_cell(_fmt(b.pos) if b else "-"))
     return lines
 
 

@@ -7,7 +7,7 @@ length repeats that imbalance. `clip_rarity` scores each clip without labels:
 
   1. every few frames, a pose descriptor that ignores heading and position: the pelvis's up
      axis, and the head, hands and feet relative to the pelvis in the body's heading frame
-     (metres divided by the skeleton's standing height). Not the pelvis height: a few CMU clips
+     (metres divided by the skeleton's leg height). Not the pelvis height: a few CMU clips
      have their floor far off (a jog 2 m up in the air), and boosting those would teach errors;
      lying, crawling and bending show in the limbs around the pelvis anyway;
   2. k-means on those descriptors (standardised) over all clips, with k = 2, 4, 8, ... 64;
@@ -31,27 +31,16 @@ MAX_CLUSTERS = 64                          # the CMU training set: ~140,000 desc
 DESCRIPTORS_PER_CLUSTER = 20
 
 
-def standing_height(offsets) -> float:
-    """Foot to head at rest (metres): the scale poses are described in."""
-    _, p = sk.forward_kinematics(np.eye(3)[None].repeat(24, 0), np.zeros(3), np.asarray(offsets, np.float64))
-    return float(p[15, 1] - min(p[10, 1], p[11, 1]))
-
-
 def pose_descriptors(motion: sk.Motion, stride: int = 10) -> np.ndarray:
     """(frames / stride, 18): pelvis up axis (3), head, hands and feet relative to the pelvis in
-    the heading frame (15); lengths over the standing height."""
+    the heading frame (15); lengths over the skeleton's leg height (skeleton.leg_height, the
+    length skeletons are scaled by)."""
     rot = np.asarray(motion.local_rot[::stride], np.float64)
     g, p = sk.forward_kinematics(rot, np.zeros((len(rot), 3)), np.asarray(motion.offsets, np.float64))
     pelvis = g[:, 0]
     forward = pelvis[:, :, 2]                        # the pelvis's +Z in the world
-    yaw = np.arctan2(forward[:, 0], forward[:, 2])
-    c, s = np.cos(-yaw), np.sin(-yaw)
-    heading_inv = np.zeros((len(rot), 3, 3))       # rotation about Y by -yaw
-    heading_inv[:, 0, 0], heading_inv[:, 0, 2] = c, s
-    heading_inv[:, 1, 1] = 1.0
-    heading_inv[:, 2, 0], heading_inv[:, 2, 2] = -s, c
-    height = standing_height(motion.offsets)
-    limbs = np.einsum("tij,tkj->tki", heading_inv, p[:, list(DESCRIPTOR_JOINTS)]) / height
+    heading_inv = sk.rot_axis("y", -np.arctan2(forward[:, 0], forward[:, 2]))
+    limbs = np.einsum("tij,tkj->tki", heading_inv, p[:, list(DESCRIPTOR_JOINTS)]) / sk.leg_height(motion.offsets)
     up = np.einsum("tij,tj->ti", heading_inv, pelvis[:, :, 1])
     return np.concatenate([up, limbs.reshape(len(rot), -1)], axis=1)
 
@@ -69,8 +58,9 @@ def kmeans(x: np.ndarray, k: int, rng: np.random.Generator, iterations: int = 25
         d2 = np.minimum(d2, ((x - x[i]) ** 2).sum(1))
     centres = np.array(centres)
     labels = np.zeros(n, dtype=np.int64)
+    x_norm2 = (x * x).sum(1)[:, None]
     for it in range(iterations):
-        dist = (x * x).sum(1)[:, None] - 2.0 * x @ centres.T + (centres * centres).sum(1)[None]
+        dist = x_norm2 - 2.0 * x @ centres.T + (centres * centres).sum(1)[None]
         new = dist.argmin(1)
         if it > 0 and np.array_equal(new, labels):
             break

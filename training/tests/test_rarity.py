@@ -29,8 +29,10 @@ def test_descriptors_ignore_heading_and_see_the_pose():
     np.testing.assert_array_equal(rarity.pose_descriptors(lifted, stride=5), d)
 
 
-def test_standing_height_of_the_default_skeleton():
-    assert 1.4 < rarity.standing_height(sk.DEFAULT_OFFSETS) < 2.0
+def test_descriptors_ignore_body_size():
+    walk = procedural.make_motion("walk", 2.0, seed=0)
+    tall = sk.Motion(walk.name, walk.subject, walk.fps, walk.local_rot, walk.root_pos * 1.2, walk.offsets * 1.2)
+    np.testing.assert_allclose(rarity.pose_descriptors(tall), rarity.pose_descriptors(walk), atol=1e-6)
 
 
 def test_the_clip_with_unshared_poses_is_the_rarest_and_the_mean_is_one():
