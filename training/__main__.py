@@ -1,4 +1,4 @@
-"""python3 -m training <command>: prepare | train | average | export | evaluate | synth-capture | tip-model.
+"""python3 -m training <command>: prepare | pack | train | average | export | evaluate | synth-capture | tip-model.
 
 Each subcommand imports its module lazily, so --help works while a module is missing."""
 from __future__ import annotations
@@ -9,6 +9,7 @@ import sys
 
 COMMANDS = {
     "prepare": ("dataset", "extract the CMU archives and convert every clip into the cache"),
+    "pack": ("motion_pack", "pack retargeted clips into one small file, to train elsewhere"),
     "train": ("train", "train the pose model (checkpoints in training/data/checkpoints)"),
     "average": ("average", "average the weights of checkpoints of one network (model soup)"),
     "export": ("export", "export ONNX fp32 + fp16 per docs/model-contract.md"),

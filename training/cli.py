@@ -64,14 +64,17 @@ def require_file(path, option: str) -> Path:
     return p
 
 
-def require_bvh_folder(path, option: str) -> Path:
+def require_bvh_folder(path, option: str, pack_ok: bool = False) -> Path:
     """A folder that exists and holds usable BVH clips (dataset.list_clips: its manifest's ok rows,
-    else every *.bvh below it)."""
+    else every *.bvh below it), or with pack_ok a motion pack file (motion_pack.py)."""
     p = Path(path)
     if not p.exists():
-        raise UsageError(f"{option} {path}: no such folder")
+        raise UsageError(f"{option} {path}: no such {'folder or pack' if pack_ok else 'folder'}")
     if not p.is_dir():
-        raise UsageError(f"{option} {path}: not a folder")
+        from .motion_pack import is_pack
+        if pack_ok and is_pack(p):
+            return p
+        raise UsageError(f"{option} {path}: not a folder" + (" or a motion pack" if pack_ok else ""))
     from .dataset import list_clips
     if not list_clips(p):
         raise UsageError(f"{option} {path}: no BVH clips in this folder (*.bvh at any depth, or the "
@@ -83,9 +86,10 @@ def require_bvh_folder(path, option: str) -> Path:
 # runs, so a typo fails in a second instead of after minutes of loading data.
 INPUTS = {
     "prepare": [("bvh", "bvh_folder", "--bvh")],
-    "train": [("bvh", "bvh_folder", "--bvh"), ("val_bvh", "bvh_folder", "--val-bvh"),
+    "pack": [("bvh", "bvh_folder", "--bvh")],
+    "train": [("bvh", "bvh_or_pack", "--bvh"), ("val_bvh", "bvh_or_pack", "--val-bvh"),
               ("init_from", "file", "--init-from")],
-    "evaluate": [("bvh", "bvh_folder", "--bvh"), ("checkpoint", "file", "--checkpoint"),
+    "evaluate": [("bvh", "bvh_or_pack", "--bvh"), ("checkpoint", "file", "--checkpoint"),
                  ("models", "files", "--models")],
     "export": [("checkpoint", "file", "--checkpoint")],
     "average": [("checkpoints", "files", "checkpoint")],
@@ -98,8 +102,8 @@ def check_inputs(command: str, args) -> None:
         value = getattr(args, attr, None)
         if not value:
             continue
-        if kind == "bvh_folder":
-            require_bvh_folder(value, option)
+        if kind in ("bvh_folder", "bvh_or_pack"):
+            require_bvh_folder(value, option, pack_ok=kind == "bvh_or_pack")
         elif kind == "file":
             require_file(value, option)
         else:

@@ -293,8 +293,8 @@ def _run(clips, cache, force, workers, progress, keep, cache_dir, desc):
 def load_motions(source="train", cache: bool = True, elbow: str = "repair", workers=None,
                  progress: bool = True, force: bool = False, cache_dir=None, split=None) -> list:
     """Motions (60 Hz, our skeleton) of a split of the extracted CMU data ("train", "val",
-    "test"), or of a BVH folder (a path: with manifest.csv, its ok rows; else every *.bvh), in
-    clip order. Converted clips are cached as npz under training/data/cache."""
+    "test"), or of a BVH folder (a path: with manifest.csv, its ok rows; else every *.bvh), or of
+    a motion pack file (motion_pack.py), in clip order. Converted clips are cached as npz under training/data/cache."""
     if elbow not in ("repair", "exclude"):
         raise ValueError("elbow must be 'repair' or 'exclude'")
     if isinstance(source, str) and source in SPLITS:
@@ -303,6 +303,10 @@ def load_motions(source="train", cache: bool = True, elbow: str = "repair", work
         root, split = CMU_DIR, source
     else:
         root = Path(source)
+        from .motion_pack import is_pack, read_pack
+        if is_pack(root):   # already retargeted (motion_pack.py): nothing to convert or cache
+            motions = read_pack(root)
+            return [m for m in motions if split is None or split_of(m.subject) == split]
     clips = list_clips(root, split, elbow)
     res = _run(clips, cache, force, workers, progress, True, cache_dir, "loading")
     out = []

@@ -730,7 +730,8 @@ def add_arguments(p):
     src = p.add_mutually_exclusive_group()
     src.add_argument("--split", default="val", choices=["train", "val", "test"],
                      help="train / val / test of the CMU data (default val)")
-    src.add_argument("--bvh", help="a folder of BVH files instead (any depth; manifest.csv honoured)")
+    src.add_argument("--bvh", help="a folder of BVH files instead (any depth; manifest.csv honoured), or a "
+                     "motion pack (training pack)")
     p.add_argument("--models", nargs="*", default=None,
                    help="ONNX models (default: the shipped fp32 and fp16, where present)")
     p.add_argument("--checkpoint", default=None, help="PyTorch checkpoint (default: the first that exists "

@@ -1,6 +1,7 @@
 """Training of PoseNet on synthesised IMU data (owner: model).
 
     python3 -m training train [--budget-minutes 60] [--resume] [--device auto|cpu|cuda] [--smoke]
+                              [--data-workers N] [--bvh DIR|PACK --val-bvh DIR|PACK]
 
 Data: motions from dataset.load_motions (train split; val split for model selection), or a BVH
 folder (--bvh), or procedural motions (--smoke). IMU signals are synthesised on the fly with
@@ -95,6 +96,7 @@ class TrainConfig:
     val_clips: int = 40
     val_max_frames: int = 1800
     max_clips: int | None = None      # use only the first N training clips (quick runs)
+    data_workers: int = 0             # processes synthesising the batches (0: this one; ParallelBatcher)
     train_source: str = "train"       # split name or BVH folder
     val_source: str | None = "val"   # split name or BVH folder; None: a share of train_source
                                       # held out (holdout_validation)
@@ -195,6 +197,100 @@ class StreamBatcher:
         batch = {k: torch.from_numpy(np.stack(v)) for k, v in out.items()}
         batch["offsets"] = torch.from_numpy(np.stack(offsets))
         return batch, torch.from_numpy(reset)
+
+
+class ParallelBatcher:
+    """The streams of a StreamBatcher played by worker processes, for a GPU that one core cannot
+    feed (synthesis: ~35 k frames/s per core). Worker k plays its own share of the streams with
+    its own generator (seed, k) and the batch joins the shares in worker order, so the batches
+    depend on the seed and the worker count, never on timing. A checkpoint holds no stream state
+    for them: a resumed run starts its streams afresh (not step for step the same run)."""
+
+    def __init__(self, base: StreamBatcher, workers: int, seed: int):
+        import multiprocessing as mp
+        self.base = base
+        self.motions, self.rarity, self.p = base.motions, base.rarity, base.p
+        self.total_frames, self.batch, self.window = base.total_frames, base.batch, base.window
+        workers = max(1, min(workers, base.batch))
+        shares = [base.batch // workers + (1 if k < base.batch % workers else 0) for k in range(workers)]
+        ctx = mp.get_context("fork")   # the workers share the motions with this process, uncopied
+        self.queues, self.procs = [], []
+        for k, n in enumerate(shares):
+            q = ctx.Queue(maxsize=3)
+            proc = ctx.Process(target=_play_streams, args=(base, n, seed, k, q), daemon=True,
+                               name=f"train-data-{k}")
+            proc.start()
+            # Only worker k may hold its pipe's write end (this process's copy is closed before
+            # the next worker is forked): a worker that dies half way through a batch then leaves
+            # an end of file here, not a read that waits for the rest forever.
+            q._writer.close()
+            self.queues.append(q)
+            self.procs.append(proc)
+
+    def state_dict(self):
+        return None
+
+    def load_state_dict(self, state) -> None:
+        pass
+
+    def next(self) -> tuple:
+        import pickle
+        import queue
+        parts = []
+        for k, q in enumerate(self.queues):
+            while True:
+                try:
+                    part = q.get(timeout=5.0)
+                    break
+                except queue.Empty:
+                    if not self.procs[k].is_alive():
+                        part = None
+                        break
+                except (EOFError, OSError, ValueError, pickle.UnpicklingError):   # died mid-batch
+                    part = None
+                    break
+            if part is None:
+                self.procs[k].join(timeout=5.0)
+                raise CommandError(f"training data worker {k} stopped (exit code "
+                                   f"{self.procs[k].exitcode}; out of memory?)")
+            if isinstance(part, str):
+                raise CommandError(f"training data worker {k} failed: {part}")
+            parts.append(part)
+        batch = {key: torch.from_numpy(np.concatenate([b[key] for b, _ in parts])) for key in parts[0][0]}
+        return batch, torch.from_numpy(np.concatenate([r for _, r in parts]))
+
+    def close(self) -> None:
+        for proc in self.procs:
+            if proc.is_alive():
+                proc.terminate()
+        for proc in self.procs:
+            proc.join(timeout=5.0)
+        for q in self.queues:
+            q.cancel_join_thread()
+            q.close()
+
+
+def _play_streams(base: StreamBatcher, streams: int, seed: int, k: int, out) -> None:
+    """Worker of ParallelBatcher: its share of the streams, batch after batch, into `out`."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C is the main process's to handle
+    torch.set_num_threads(1)
+    base.batch, base.rng = streams, np.random.default_rng([seed, k])
+    base.samples, base.pos = [None] * streams, [0] * streams
+    try:
+        while True:
+            # numpy arrays, pickled through the queue's pipe: torch tensors would travel as shared
+            # memory that the receiver can no longer open once this process has gone
+            batch, reset = base.next()
+            out.put(({key: v.numpy() for key, v in batch.items()}, reset.numpy()))
+    except Exception as e:   # the main process reports it and stops
+        out.put(f"{type(e).__name__}: {e}")
+
+
+def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator):
+    base = StreamBatcher(motions, cfg.batch, cfg.window, rng,
+                         Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg),
+                         wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost)
+    return ParallelBatcher(base, cfg.data_workers, cfg.seed) if cfg.data_workers > 0 else base
 
 
 def rarity_summary(batcher: StreamBatcher) -> str:
@@ -576,9 +672,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
                                  f"training them for the {cfg.wrist_sensor} is not supported")
             net.anchor_wrists_on_forearm()
             print("train: the wrist sensors move from the hands to the forearms (wrist straps)")
-    batcher = StreamBatcher(motions, cfg.batch, cfg.window, rng,
-                            Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg),
-                            wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost)
+    batcher = make_batcher(motions, cfg, rng)
     if cfg.rare_boost > 0:
         print(f"train: rare poses boosted ({rarity_summary(batcher)})")
     val = validation_set(val_motions or [], cfg) if val_motions else []
@@ -587,7 +681,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
           f"({steps_per_epoch} steps/epoch), {len(val)} val clips, device {device}, blas {blas}, "
           f"{count_parameters(net)} parameters")
     state = net.zero_state(cfg.batch, device)
-    if ck is not None and "batcher" in ck:   # older checkpoints: the streams start afresh
+    if ck is not None and ck.get("batcher") is not None:   # older or parallel runs: the streams start afresh
         batcher.load_state_dict(ck["batcher"])
         state = tuple(t.to(device) for t in ck["lstm_state"])
     t_start = time.time()
@@ -702,6 +796,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             signal.signal(signal.SIGINT, previous_handler)
         if pbar is not None:
             pbar.close()
+        if isinstance(batcher, ParallelBatcher):
+            batcher.close()
     _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
     if not val:
         _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
@@ -729,7 +825,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
 # and where it writes. Every other option comes from the checkpoint (its saved train_config; the
 # network's size, anchoring and wrist placement from its model config).
 RESUME_OVERRIDES = ("budget_minutes", "steps", "stop_after", "device", "ckpt_dir", "results_dir", "progress",
-                    "resume", "eval_every_s", "ckpt_every_s")
+                    "resume", "eval_every_s", "ckpt_every_s", "data_workers")
 ARCHITECTURE = ("size", "anchored", "wrist_sensor")
 _OPTIONS = {"w_pos": "--pos-weight", "arm_jitter_deg": "--arm-jitter", "anchored": "--no-anchor",
             "train_source": "--bvh", "val_source": "--val-bvh"}
@@ -816,7 +912,8 @@ def config_from_args(args) -> TrainConfig:
     explicit = set()
     for k in ("budget_minutes", "steps", "stop_after", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
-              "arm_jitter_deg", "rare_boost", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor"):
+              "arm_jitter_deg", "rare_boost", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor", "data_workers",
+              "eval_every_s"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -881,6 +978,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--device", default=None, choices=["auto", "cpu", "cuda"])
     parser.add_argument("--smoke", action="store_true", help="tiny procedural run (seconds)")
     parser.add_argument("--size", default=None, choices=sorted(SIZES), help="model size (default medium)")
+    parser.add_argument("--eval-every", dest="eval_every_s", type=POSITIVE, default=None,
+                        help="seconds between validations, each a chance to write best.pt (default 180)")
+    parser.add_argument("--data-workers", dest="data_workers", type=NON_NEGATIVE_INT, default=None,
+                        help="processes that synthesise the training batches (default 0: the training "
+                             "process; a GPU needs several: about 35 k frames/s each)")
     parser.add_argument("--batch", type=POSITIVE_INT, default=None, help="streams per step (default 32)")
     parser.add_argument("--window", type=POSITIVE_INT, default=None, help="frames per step (default 120)")
     parser.add_argument("--lr", type=POSITIVE, default=None)
@@ -910,8 +1012,8 @@ def add_arguments(parser) -> None:
                         help="loss curve and log folder (default training/results)")
     parser.add_argument("--max-clips", dest="max_clips", type=POSITIVE_INT, default=None,
                         help="train on N of the training clips, drawn with --seed (quick runs)")
-    parser.add_argument("--bvh", default=None, help="train on a BVH folder instead of the CMU split "
+    parser.add_argument("--bvh", default=None, help="train on a BVH folder or a motion pack (training pack) instead of the CMU split "
                         "(without --val-bvh, about 10 %% of its clips are held out for validation: "
                         "by subject where the names carry CMU subject numbers, else by clip)")
     parser.add_argument("--val-bvh", dest="val_bvh", default=None,
-                        help="validation BVH folder (default: a held-out share of --bvh)")
+                        help="validation BVH folder or motion pack (default: a held-out share of --bvh)")

@@ -619,3 +619,50 @@ def test_clips_whose_root_jumps_are_left_out_of_training_only(tmp_path, capsys):
     from training.cli import UsageError
     with pytest.raises(UsageError, match="every training clip has root jumps"):
         tr.train(_tiny_config(tmp_path / "b"), [glitch], clean[:1])
+
+
+def test_parallel_batches_are_the_workers_streams_joined_whatever_the_timing():
+    motions = _motions(4, 0)
+    cfg = tr.TrainConfig(batch=5, window=30, seed=3, data_workers=2)
+
+    def parallel():
+        return tr.make_batcher(motions, cfg, np.random.default_rng(cfg.seed))
+
+    a, b = parallel(), parallel()
+    try:
+        assert isinstance(a, tr.ParallelBatcher) and a.total_frames == sum(m.num_frames for m in motions)
+        # worker k plays streams of its own generator (seed, k): 3 + 2 streams here
+        shares = [tr.StreamBatcher(motions, n, 30, np.random.default_rng([3, k])) for k, n in enumerate((3, 2))]
+        for _ in range(4):
+            (ba, ra), (bb, rb) = a.next(), b.next()
+            parts = [s.next() for s in shares]
+            assert ba["imu_orientation"].shape == (5, 30, 6, 3, 3) and ra.shape == (5,)
+            for key in ba:
+                torch.testing.assert_close(ba[key], bb[key], rtol=0, atol=0)
+                torch.testing.assert_close(ba[key], torch.cat([p[0][key] for p in parts]), rtol=0, atol=0)
+            assert torch.equal(ra, rb) and torch.equal(ra, torch.cat([p[1] for p in parts]))
+        # a worker that dies is an error, not a hang
+        a.procs[1].kill()
+        a.procs[1].join()
+        with pytest.raises(tr.CommandError, match="worker 1 stopped"):
+            for _ in range(10):
+                a.next()
+    finally:
+        a.close()
+        b.close()
+    assert not any(p.is_alive() for p in a.procs + b.procs)
+    assert isinstance(tr.make_batcher(motions, replace(cfg, data_workers=0), np.random.default_rng(0)),
+                       tr.StreamBatcher)
+
+
+def test_a_run_with_data_workers_trains_and_shuts_its_workers_down(tmp_path):
+    import multiprocessing
+    cfg = tr.TrainConfig(steps=6, batch=4, window=30, size="tiny", warmup=2, device="cpu", data_workers=2,
+                         ckpt_dir=str(tmp_path / "ck"), results_dir=str(tmp_path / "res"), progress=False,
+                         eval_every_s=1e9)
+    summary = tr.train(cfg, _motions(4, 0), _motions(1, 50))
+    assert summary["steps"] == 6 and (tmp_path / "ck" / "last.pt").is_file()
+    assert not [p for p in multiprocessing.active_children() if p.name.startswith("train-data")]
+    assert tr.load_checkpoint_file(tmp_path / "ck" / "last.pt")["batcher"] is None   # resumed: fresh streams
+    cfg = _cli(["--data-workers", 3, "--eval-every", 30])
+    assert (cfg.data_workers, cfg.eval_every_s) == (3, 30)
