@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import lzma
+import os
 import struct
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -123,7 +124,6 @@ def write_pack(clips, out, workers=None, progress: bool = True) -> dict:
     """Pack (clip, subject, path, elbow_reversed) rows (dataset.list_clips) into `out`; returns a
     summary. Written through a temporary file: a failed write leaves no partial pack."""
     from .dataset import _progress
-    import os
     if not clips:
         raise UsageError("no clips to pack")
     workers = max(1, min(workers or os.cpu_count() or 1, len(clips)))

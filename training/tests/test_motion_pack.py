@@ -88,11 +88,16 @@ def test_pack_command_and_training_options_take_packs(fixture_dir, tmp_path, cap
     assert "-> " in capsys.readouterr().out and [m.name for m in ds.load_motions(out)] == ["01_01"]
     cfg = tr.config_from_args(_train_args(["--bvh", str(out), "--val-bvh", str(out)]))
     assert cfg.train_source == str(out) and cfg.val_source == str(out)
+    from argparse import Namespace
+    from training.cli import check_inputs
+    check_inputs("evaluate", Namespace(bvh=str(out)))   # evaluate --bvh takes a pack too
     # a file that is not a pack is refused before any data loads
     junk = tmp_path / "junk.mpack"
     junk.write_text("hello")
     assert cli_main(["train", "--bvh", str(junk), "--steps", "1"]) == 1
     assert "not a folder or a motion pack" in capsys.readouterr().err
+    with pytest.raises(tr.UsageError, match="not a folder or a motion pack"):
+        check_inputs("evaluate", Namespace(bvh=str(junk)))
     assert cli_main(["pack", "--bvh", str(tmp_path / "none"), "--out", str(tmp_path / "x.mpack")]) == 1
     assert not (tmp_path / "x.mpack").exists()
 

@@ -666,3 +666,13 @@ def test_a_run_with_data_workers_trains_and_shuts_its_workers_down(tmp_path):
     assert tr.load_checkpoint_file(tmp_path / "ck" / "last.pt")["batcher"] is None   # resumed: fresh streams
     cfg = _cli(["--data-workers", 3, "--eval-every", 30])
     assert (cfg.data_workers, cfg.eval_every_s) == (3, 30)
+
+
+def test_data_workers_refuse_a_shared_memory_too_small_for_their_buffers(tmp_path, monkeypatch):
+    import os
+    stat = os.statvfs_result((4096, 4096, 1000, 1000, 10, 0, 0, 0, 0, 255))   # 40 kB free
+    monkeypatch.setattr(tr.os, "statvfs", lambda path: stat)
+    cfg = tr.TrainConfig(batch=4, window=30, data_workers=2)
+    with pytest.raises(tr.UsageError, match=r"needs \d+ MB of shared memory for its batch buffers, /dev/shm has 0 MB free"):
+        tr.make_batcher(_motions(2, 0), cfg, np.random.default_rng(0))
+    tr._require_shared_memory(10_000)   # fits in 40 kB
