@@ -16,7 +16,7 @@ packs=$1 out=$2 minutes=$3
 device=${DEVICE:-cuda} py=${PYTHON:-python3}   # DEVICE=cpu: a dry run here
 shift 3
 cd "$(dirname "$0")/.."
-export PYTHONPATH=. PYTHONUNBUFFERED=1 TQDM_MININTERVAL=15
+export PYTHONPATH=. PYTHONUNBUFFERED=1
 mkdir -p "$out"
 exec > >(tee "$out/console.log") 2>&1
 "$py" - <<'EOF'

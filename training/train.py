@@ -745,7 +745,9 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     pbar = None
     if cfg.progress:
         from tqdm import tqdm
-        pbar = tqdm(total=total, initial=step, desc="train", unit="step", dynamic_ncols=True)
+        # into a log file (not a terminal), one line every 30 s instead of ten a second
+        pbar = tqdm(total=total, initial=step, desc="train", unit="step", dynamic_ncols=True,
+                    mininterval=0.1 if sys.stderr.isatty() else 30.0)
     net.train()
     # Ctrl-C finishes the step under way and saves last.pt as of its end, so `--resume` goes on
     # exactly from there (a step interrupted half way would leave weights, optimizer and random
@@ -817,7 +819,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
                     pbar.refresh()
             if pbar is not None:
                 pbar.update(1)
-                pbar.set_postfix(loss=f"{float(losses['loss']):.3f}")
+                pbar.set_postfix(loss=f"{float(losses['loss']):.3f}", refresh=False)
             if acc_n >= 50 or (total is not None and step >= total):
                 rec = {k: v / acc_n for k, v in acc.items()}
                 rec.update(step=step, epoch=step / steps_per_epoch, lr=opt.param_groups[0]["lr"],
