@@ -233,14 +233,16 @@ class ParallelBatcher:
         for k, n in enumerate(shares):
             slots = [{key: torch.empty((n,) + tuple(v.shape[1:]), dtype=v.dtype).share_memory_()
                       for key, v in one.items()} for _ in range(self.SLOTS)]
-            ready, free = ctx.Queue(), ctx.Queue()
-            proc = ctx.Process(target=_play_streams, args=(base, n, seed, k, slots, ready, free),
+            ready, ready_end = ctx.Pipe(duplex=False)   # worker -> here: numbers of filled slots
+            free_end, free = ctx.Pipe(duplex=False)     # here -> worker: numbers of emptied slots
+            proc = ctx.Process(target=_play_streams, args=(base, n, seed, k, slots, ready_end, free_end),
                                daemon=True, name=f"train-data-{k}")
             proc.start()
-            # Only worker k may hold the write end of its `ready` pipe (this process's copy is
-            # closed before the next worker is forked): a worker that dies then leaves an end of
-            # file here, not a read that waits forever.
-            ready._writer.close()
+            # Only worker k holds the write end of its `ready` pipe (this process's copy is closed
+            # before the next worker is forked): a worker that dies then leaves an end of file
+            # here, not a read that waits forever.
+            ready_end.close()
+            free_end.close()
             self.slots.append(slots)
             self.ready.append(ready)
             self.free.append(free)
@@ -260,18 +262,14 @@ class ParallelBatcher:
         pass
 
     def _take(self, k: int) -> int:
-        import queue
-        while True:
-            try:
-                got = self.ready[k].get(timeout=5.0)
-                break
-            except queue.Empty:
-                if not self.procs[k].is_alive():
-                    got = None
-                    break
-            except (EOFError, OSError, ValueError):
-                got = None
-                break
+        got = None
+        try:
+            while not self.ready[k].poll(5.0):
+                if not self.procs[k].is_alive() and not self.ready[k].poll(0):
+                    raise EOFError
+            got = self.ready[k].recv()
+        except (EOFError, OSError):
+            pass
         if got is None:
             self.procs[k].join(timeout=5.0)
             raise CommandError(f"training data worker {k} stopped (exit code {self.procs[k].exitcode}; "
@@ -290,7 +288,10 @@ class ParallelBatcher:
         for key, dest in out.items():
             torch.cat([part[key] for part in parts], out=dest)
         for k, j in enumerate(taken):
-            self.free[k].put(j)
+            try:
+                self.free[k].send(j)
+            except OSError:   # the worker is gone: its next batch reports it
+                pass
         batch = dict(out)
         return batch, batch.pop("reset")
 
@@ -300,9 +301,8 @@ class ParallelBatcher:
                 proc.terminate()
         for proc in self.procs:
             proc.join(timeout=5.0)
-        for q in self.ready + self.free:
-            q.cancel_join_thread()
-            q.close()
+        for conn in self.ready + self.free:
+            conn.close()
 
 
 def _require_shared_memory(need: int, where: str = "/dev/shm") -> None:
@@ -321,22 +321,29 @@ def _require_shared_memory(need: int, where: str = "/dev/shm") -> None:
 
 def _play_streams(base: StreamBatcher, streams: int, seed: int, k: int, slots, ready, free) -> None:
     """Worker of ParallelBatcher: its share of the streams, batch after batch, into the shared
-    buffers `slots`; `ready` takes the numbers of filled ones, `free` gives back emptied ones."""
+    buffers `slots`; the pipe `ready` takes the numbers of filled ones, `free` gives back emptied
+    ones."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C is the main process's to handle
     torch.set_num_threads(1)
     base.batch, base.rng = streams, np.random.default_rng([seed, k])
     base.samples, base.pos = [None] * streams, [0] * streams
     own = list(range(len(slots)))
+    parent = os.getppid()
     try:
         while True:
             batch, reset = base.next()
-            j = own.pop() if own else free.get()
+            while not own and not free.poll(5.0):
+                if os.getppid() != parent:   # the training process is gone: so is the point
+                    return
+            j = own.pop() if own else free.recv()
             for key, v in batch.items():
                 slots[j][key].copy_(v)
             slots[j]["reset"].copy_(reset)
-            ready.put(j)
+            ready.send(j)
+    except (EOFError, BrokenPipeError):   # the training process closed its ends
+        return
     except Exception as e:   # the main process reports it and stops
-        ready.put(f"{type(e).__name__}: {e}")
+        ready.send(f"{type(e).__name__}: {e}")
 
 
 def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator):
