@@ -64,6 +64,28 @@ def require_file(path, option: str) -> Path:
     return p
 
 
+def atomic_write_bytes(data, path, what: str) -> None:
+    """Write `data` (bytes-like) to a temporary file beside `path`, fsync, then os.replace: an
+    interrupted or failed write (disk full, Ctrl-C) leaves the previous file, never a truncated
+    one. A failed write is a CommandError naming `path` and `what` it was meant to hold."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())   # a full disk can show only here (delayed allocation)
+        os.replace(tmp, path)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        kept = "the previous file is kept" if path.exists() else "nothing written"
+        raise CommandError(f"{path}: cannot write the {what} ({e.strerror or e}); {kept}") from e
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 def require_bvh_folder(path, option: str, pack_ok: bool = False) -> Path:
     """A folder that exists and holds usable BVH clips (dataset.list_clips: its manifest's ok rows,
     else every *.bvh below it), or with pack_ok a motion pack file (motion_pack.py)."""

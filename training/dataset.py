@@ -290,17 +290,23 @@ def _run(clips, cache, force, workers, progress, keep, cache_dir, desc):
     return results
 
 
+def extracted_cmu() -> Path:
+    """The extracted CMU folder, extracting ../shared/data/cmu first when it is not there yet."""
+    if not (CMU_DIR / "manifest.csv").exists():
+        extract_cmu(CMU_DIR)
+    return CMU_DIR
+
+
 def load_motions(source="train", cache: bool = True, elbow: str = "repair", workers=None,
                  progress: bool = True, force: bool = False, cache_dir=None, split=None) -> list:
     """Motions (60 Hz, our skeleton) of a split of the extracted CMU data ("train", "val",
     "test"), or of a BVH folder (a path: with manifest.csv, its ok rows; else every *.bvh), or of
-    a motion pack file (motion_pack.py), in clip order. Converted clips are cached as npz under training/data/cache."""
+    a motion pack file (motion_pack.py), in clip order. Converted clips are cached as npz under
+    training/data/cache."""
     if elbow not in ("repair", "exclude"):
         raise ValueError("elbow must be 'repair' or 'exclude'")
     if isinstance(source, str) and source in SPLITS:
-        if not (CMU_DIR / "manifest.csv").exists():
-            extract_cmu(CMU_DIR)
-        root, split = CMU_DIR, source
+        root, split = extracted_cmu(), source
     else:
         root = Path(source)
         from .motion_pack import is_pack, read_pack

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
-from .cli import CommandError, UsageError
+from .cli import CommandError, UsageError, atomic_write_bytes
 
 MAGIC = b"MOCAPPK1"
 FORMAT = 1
@@ -139,20 +139,9 @@ def write_pack(clips, out, workers=None, progress: bool = True) -> dict:
     root = np.concatenate([r[6] for r in results])
     payload = lzma.compress(_planes(rot, np.uint32) + _planes(root, np.uint64), preset=_XZ)
     head = json.dumps(header).encode()
-    out = Path(out)
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
-            f.write(MAGIC + struct.pack("<I", len(head)) + head + payload)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, out)
-    except OSError as e:
-        tmp.unlink(missing_ok=True)
-        raise CommandError(f"{out}: cannot write the pack ({e.strerror or e})") from e
+    atomic_write_bytes(MAGIC + struct.pack("<I", len(head)) + head + payload, out, "pack")
     frames = sum(r[4] for r in results)
-    return {"clips": len(results), "source_frames": frames, "bytes": out.stat().st_size}
+    return {"clips": len(results), "source_frames": frames, "bytes": Path(out).stat().st_size}
 
 
 def _read_header(data: bytes, path) -> tuple:
@@ -214,9 +203,7 @@ def main(args) -> int:
     if args.bvh:
         clips = dataset.list_clips(Path(args.bvh), args.split)
     else:
-        if not (dataset.CMU_DIR / "manifest.csv").exists():
-            dataset.extract_cmu(dataset.CMU_DIR)
-        clips = dataset.list_clips(dataset.CMU_DIR, args.split)
+        clips = dataset.list_clips(dataset.extracted_cmu(), args.split)
     s = write_pack(clips, args.out, workers=args.workers)
     print(f"pack: {s['clips']} clips, {s['source_frames']} source frames -> {args.out} "
           f"({s['bytes'] / 1e6:.1f} MB)")

@@ -52,7 +52,7 @@ import torch.nn.functional as F
 
 from . import skeleton as sk
 from .cli import (NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, CommandError, UsageError,
-                  number_type)
+                  atomic_write_bytes, number_type)
 from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch, non_finite_tensors
 from .rarity import clip_rarity
 from .synthesis import Augmentation, synthesize, vary_motion
@@ -216,7 +216,6 @@ class ParallelBatcher:
     def __init__(self, base: StreamBatcher, workers: int, seed: int):
         import copy
         import multiprocessing as mp
-        self.base = base
         self.motions, self.rarity, self.p = base.motions, base.rarity, base.p
         self.total_frames, self.batch, self.window = base.total_frames, base.batch, base.window
         workers = max(1, min(workers, base.batch))
@@ -557,31 +556,16 @@ def save_weights(src, dst) -> None:
 
 
 def atomic_torch_save(obj, path) -> None:
-    """torch.save to a temporary file beside `path`, then os.replace: an interrupted or failed
-    write (disk full, Ctrl-C) leaves the previous file, never a truncated one. A failed write is a
-    CommandError naming `path`.
+    """torch.save through cli.atomic_write_bytes: an interrupted or failed write (disk full,
+    Ctrl-C) leaves the previous file, never a truncated one; a failed write is a CommandError
+    naming `path`.
 
     torch.save serialises into memory and Python writes the file: torch's own file writer, on a
     full disk, raises and then aborts the whole process (C++ terminate in its destructor, exit
     134) before any handler runs. A checkpoint is tens of MB, so the copy in memory is cheap."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     buffer = io.BytesIO()
     torch.save(obj, buffer)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
-            f.write(buffer.getbuffer())
-            f.flush()
-            os.fsync(f.fileno())   # a full disk can show only here (delayed allocation)
-        os.replace(tmp, path)
-    except OSError as e:
-        tmp.unlink(missing_ok=True)
-        kept = "the previous file is kept" if path.exists() else "nothing written"
-        raise CommandError(f"{path}: cannot write the checkpoint ({e.strerror or e}); {kept}") from e
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    atomic_write_bytes(buffer.getbuffer(), path, "checkpoint")
 
 
 def load_checkpoint_file(path, device="cpu") -> dict:
@@ -741,7 +725,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
           f"({steps_per_epoch} steps/epoch), {len(val)} val clips, device {device}, blas {blas}, "
           f"{count_parameters(net)} parameters")
     state = net.zero_state(cfg.batch, device)
-    if ck is not None and ck.get("batcher") is not None:   # older or parallel runs: the streams start afresh
+    if ck is not None and ck.get("batcher") is not None:   # older or parallel runs: fresh streams
         batcher.load_state_dict(ck["batcher"])
         state = tuple(t.to(device) for t in ck["lstm_state"])
     t_start = time.time()
@@ -1074,7 +1058,8 @@ def add_arguments(parser) -> None:
                         help="loss curve and log folder (default training/results)")
     parser.add_argument("--max-clips", dest="max_clips", type=POSITIVE_INT, default=None,
                         help="train on N of the training clips, drawn with --seed (quick runs)")
-    parser.add_argument("--bvh", default=None, help="train on a BVH folder or a motion pack (training pack) instead of the CMU split "
+    parser.add_argument("--bvh", default=None, help="train on a BVH folder or a motion pack (training "
+                        "pack) instead of the CMU split "
                         "(without --val-bvh, about 10 %% of its clips are held out for validation: "
                         "by subject where the names carry CMU subject numbers, else by clip)")
     parser.add_argument("--val-bvh", dest="val_bvh", default=None,
