@@ -72,6 +72,7 @@ class Augmentation:
     # Motion variety (applied by the trainer's batcher through `vary_motion`, before synthesis):
     arm_swap: float = 0.0            # probability that both arms move as in another clip
     arm_jitter_deg: float = 0.0      # per-axis sigma of a slowly varying offset of each shoulder
+    spine_jitter_deg: float = 0.0    # the same for each of the three spine joints
 
 
 @dataclass
@@ -173,6 +174,7 @@ def _hold_drops(rng, x: np.ndarray, rate: float, max_len: int) -> np.ndarray:
 # ------------------------------------------------------------------------------ motion variety
 ARM_JOINTS = [13, 14, 16, 17, 18, 19, 20, 21, 22, 23]   # collars, shoulders, elbows, wrists, hands
 SHOULDER_JOINTS = [16, 17]
+SPINE_JOINTS = [3, 6, 9]                                  # spine1, spine2, spine3
 
 
 def _smooth_offsets(rng, T: int, fps: float, sigma_deg: float, n: int) -> np.ndarray:
@@ -191,7 +193,9 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
     error on the training subjects is far below that on new ones, mostly in the unobserved upper
     arms. With probability `arm_swap` both arms (collars to hands) take their local rotations
     from a random window of a donor clip; `arm_jitter_deg` adds a slow random rotation to each
-    shoulder. Legs, root and therefore contacts and root velocity are untouched; the sensors are
+    shoulder, `spine_jitter_deg` to each spine joint (the trunk bends and twists a little
+    otherwise than it did, so its bend must be read from the head and wrist sensors rather than
+    guessed from the legs' motion). Legs, root and therefore contacts and root velocity are untouched; the sensors are
     synthesised afterwards from the new pose, so signals and targets stay consistent."""
     if not augment:
         return motion
@@ -200,7 +204,7 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
         d = donors[int(rng.integers(len(donors)))]
         if d is not motion and float(d.fps) == float(motion.fps):
             donor = d
-    if donor is None and augment.arm_jitter_deg <= 0:
+    if donor is None and augment.arm_jitter_deg <= 0 and augment.spine_jitter_deg <= 0:
         return motion
     T = motion.num_frames if donor is None else min(motion.num_frames, donor.num_frames)
     a = int(rng.integers(0, motion.num_frames - T + 1))
@@ -212,6 +216,10 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
         off = _smooth_offsets(rng, T, float(motion.fps), augment.arm_jitter_deg,
                               len(SHOULDER_JOINTS)).astype(local.dtype)
         local[:, SHOULDER_JOINTS] = local[:, SHOULDER_JOINTS] @ off
+    if augment.spine_jitter_deg > 0:
+        off = _smooth_offsets(rng, T, float(motion.fps), augment.spine_jitter_deg,
+                              len(SPINE_JOINTS)).astype(local.dtype)
+        local[:, SPINE_JOINTS] = local[:, SPINE_JOINTS] @ off
     return sk.Motion(name=motion.name, subject=motion.subject, fps=motion.fps,
                      local_rot=local, root_pos=np.asarray(motion.root_pos)[a:a + T],
                      offsets=motion.offsets)

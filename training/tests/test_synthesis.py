@@ -234,6 +234,22 @@ def test_arm_jitter_turns_only_the_shoulders_slowly_by_about_sigma():
     assert np.abs(np.diff(ang[:, sy.SHOULDER_JOINTS], axis=0)).max() < 1.0    # slow: < 1 deg/frame
 
 
+def test_spine_jitter_bends_only_the_spine_and_moves_the_upper_sensors():
+    walk, _ = _two_clips()
+    v = sy.vary_motion(walk, np.random.default_rng(6), sy.Augmentation(spine_jitter_deg=6.0))
+    rel = np.swapaxes(walk.local_rot, -1, -2) @ v.local_rot
+    ang = np.rad2deg(np.linalg.norm(sk.rot_to_axis_angle(rel), axis=-1))      # (T,24)
+    others = [j for j in range(24) if j not in sy.SPINE_JOINTS]
+    assert ang[:, others].max() < 1e-3
+    assert 2.0 < ang[:, sy.SPINE_JOINTS].mean() < 20.0
+    assert np.abs(np.diff(ang[:, sy.SPINE_JOINTS], axis=0)).max() < 1.0
+    # the head and wrist sensors ride on the bent trunk; pelvis, shins and contacts do not move
+    s, w = sy.synthesize(v), sy.synthesize(walk)
+    assert np.abs(s.imu_orientation[:, [1, 2, 5]] - w.imu_orientation[:, [1, 2, 5]]).max() > 0.05
+    assert np.allclose(s.imu_orientation[:, [0, 3, 4]], w.imu_orientation[:, [0, 3, 4]], atol=1e-6)
+    assert np.array_equal(s.foot_contact, w.foot_contact)
+
+
 def test_motion_variety_is_off_by_default_and_for_evaluation():
     walk, arms = _two_clips()
     rng = np.random.default_rng(5)
