@@ -165,7 +165,7 @@ def _read_header(data: bytes, path) -> tuple:
 
 def read_pack(path, fps: float = sk.MODEL_FPS) -> list:
     """The Motions of a pack at `fps`, in packed order; a damaged pack is an error naming it."""
-    from .retarget import resample
+    from .retarget import at_rate
     path = Path(path)
     header, payload = _read_header(path.read_bytes(), path)
     clips = header["clips"]
@@ -186,9 +186,7 @@ def read_pack(path, fps: float = sk.MODEL_FPS) -> list:
         nr, np_ = int(F) * sk.NUM_JOINTS * 4, int(F) * 3
         local, rootpos = _decode_clip(rot[ro:ro + nr], root[po:po + np_], int(F))
         ro, po = ro + nr, po + np_
-        dt = float(c["frame_time"])
-        if abs(dt * fps - 1.0) > 1e-6:
-            local, rootpos = resample(local, rootpos, dt, fps)
+        local, rootpos = at_rate(local, rootpos, float(c["frame_time"]), fps)
         m = sk.Motion(name=str(c["name"]), subject=int(c["subject"]), fps=float(fps),
                       local_rot=local.astype(np.float32), root_pos=rootpos.astype(np.float32),
                       offsets=np.asarray(c["offsets"], np.float32).reshape(sk.NUM_JOINTS, 3))

@@ -321,12 +321,19 @@ def resample(local_rot, root_pos, src_dt: float, fps: float = sk.MODEL_FPS):
     return rot, root
 
 
+def at_rate(local_rot, root_pos, src_dt: float, fps: float = sk.MODEL_FPS):
+    """(local_rot, root_pos) at `fps`: resampled unless the source frame time already is 1/fps
+    (then returned as they are, so clips at the model rate are never interpolated)."""
+    if abs(src_dt * fps - 1.0) > 1e-6:
+        return resample(local_rot, root_pos, src_dt, fps)
+    return local_rot, root_pos
+
+
 def to_smpl_motion(clip: BvhClip, name: str = "", subject: int = 0, elbow_reversed: str = "",
                    units=None, fps: float = sk.MODEL_FPS, floor: bool = True) -> sk.Motion:
     """Source BVH clip -> Motion on our skeleton at `fps` (see the module docstring)."""
     local, root, offsets = retarget_frames(clip, elbow_reversed, units, floor)
-    if abs(clip.frame_time * fps - 1.0) > 1e-6:
-        local, root = resample(local, root, clip.frame_time, fps)
+    local, root = at_rate(local, root, clip.frame_time, fps)
     m = sk.Motion(name=name, subject=int(subject), fps=float(fps), local_rot=local.astype(np.float32),
                   root_pos=root.astype(np.float32), offsets=offsets.astype(np.float32))
     # the checks above should leave nothing non-finite; training and evaluation must never see it

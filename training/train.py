@@ -169,6 +169,9 @@ class StreamBatcher:
             raise UsageError(f"the checkpoint's batcher has {len(state['samples'])} streams, not {self.batch}")
         self.samples, self.pos = list(state["samples"]), [int(p) for p in state["pos"]]
 
+    def close(self) -> None:
+        """Nothing to release (ParallelBatcher's counterpart stops its workers)."""
+
     def _new(self, i: int) -> None:
         while True:   # a sped-up short clip can end up shorter than a window: draw again
             m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
@@ -844,8 +847,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             signal.signal(signal.SIGINT, previous_handler)
         if pbar is not None:
             pbar.close()
-        if isinstance(batcher, ParallelBatcher):
-            batcher.close()
+        batcher.close()
     _save(ckpt_dir / "last.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
     if not val:
         _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
