@@ -73,6 +73,7 @@ class Augmentation:
     arm_swap: float = 0.0            # probability that both arms move as in another clip
     arm_jitter_deg: float = 0.0      # per-axis sigma of a slowly varying offset of each shoulder
     spine_jitter_deg: float = 0.0    # the same for each of the three spine joints
+    trunk_swap: float = 0.0          # probability that the whole upper body moves as in another clip
 
 
 @dataclass
@@ -175,6 +176,7 @@ def _hold_drops(rng, x: np.ndarray, rate: float, max_len: int) -> np.ndarray:
 ARM_JOINTS = [13, 14, 16, 17, 18, 19, 20, 21, 22, 23]   # collars, shoulders, elbows, wrists, hands
 SHOULDER_JOINTS = [16, 17]
 SPINE_JOINTS = [3, 6, 9]                                  # spine1, spine2, spine3
+UPPER_BODY_JOINTS = sorted(SPINE_JOINTS + [12, 15] + ARM_JOINTS)   # spine, neck, head, arms
 
 
 def _smooth_offsets(rng, T: int, fps: float, sigma_deg: float, n: int) -> np.ndarray:
@@ -187,6 +189,12 @@ def _smooth_offsets(rng, T: int, fps: float, sigma_deg: float, n: int) -> np.nda
     return sk.axis_angle_to_rot(wave * np.deg2rad(sigma_deg))           # sum of 2 sines: std 1
 
 
+def _donor(motion, donors, rng):
+    """A random other clip at the same frame rate, or None (the draw landed on the clip itself)."""
+    d = donors[int(rng.integers(len(donors)))]
+    return d if d is not motion and float(d.fps) == float(motion.fps) else None
+
+
 def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
     """New arm movements on an existing clip (training only). The 6 h of CMU motion tie each arm
     pose to the body motion it was captured with, and the network learns those pairings: its
@@ -195,15 +203,18 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
     from a random window of a donor clip; `arm_jitter_deg` adds a slow random rotation to each
     shoulder, `spine_jitter_deg` to each spine joint (the trunk bends and twists a little
     otherwise than it did, so its bend must be read from the head and wrist sensors rather than
-    guessed from the legs' motion). Legs, root and therefore contacts and root velocity are untouched; the sensors are
+    guessed from the legs' motion). With probability `trunk_swap` (drawn before the arm swap,
+    which it then replaces) the whole upper body, spine to head and hands, moves as in the
+    donor's window: a bent-over or twisted trunk on legs that walk, stand or climb. Legs, root and therefore contacts and root velocity are untouched; the sensors are
     synthesised afterwards from the new pose, so signals and targets stay consistent."""
     if not augment:
         return motion
-    donor = None
-    if donors and augment.arm_swap > 0 and rng.random() < augment.arm_swap:
-        d = donors[int(rng.integers(len(donors)))]
-        if d is not motion and float(d.fps) == float(motion.fps):
-            donor = d
+    donor, swapped = None, ARM_JOINTS
+    # trunk_swap 0 draws nothing here, so arm-only runs keep their random streams
+    if donors and augment.trunk_swap > 0 and rng.random() < augment.trunk_swap:
+        donor, swapped = _donor(motion, donors, rng), UPPER_BODY_JOINTS
+    elif donors and augment.arm_swap > 0 and rng.random() < augment.arm_swap:
+        donor = _donor(motion, donors, rng)
     if donor is None and augment.arm_jitter_deg <= 0 and augment.spine_jitter_deg <= 0:
         return motion
     T = motion.num_frames if donor is None else min(motion.num_frames, donor.num_frames)
@@ -211,7 +222,7 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
     local = np.array(motion.local_rot[a:a + T])                   # a copy: the clip is shared
     if donor is not None:
         b = int(rng.integers(0, donor.num_frames - T + 1))
-        local[:, ARM_JOINTS] = np.asarray(donor.local_rot)[b:b + T, ARM_JOINTS]
+        local[:, swapped] = np.asarray(donor.local_rot)[b:b + T, swapped]
     if augment.arm_jitter_deg > 0:
         off = _smooth_offsets(rng, T, float(motion.fps), augment.arm_jitter_deg,
                               len(SHOULDER_JOINTS)).astype(local.dtype)

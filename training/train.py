@@ -85,6 +85,7 @@ class TrainConfig:
     arm_swap: float = 0.0             # Augmentation.arm_swap / arm_jitter_deg (motion variety)
     arm_jitter_deg: float = 0.0
     spine_jitter_deg: float = 0.0
+    trunk_swap: float = 0.0
     rare_boost: float = 0.0           # clips drawn by length x rarity^rare_boost (rarity.py)
     rot_loss: str = "chordal"         # "chordal": Frobenius distance per joint (~ angle, like the
                                       # metric); "squared": its square (punishes outliers more)
@@ -352,7 +353,7 @@ def _play_streams(base: StreamBatcher, streams: int, seed: int, k: int, slots, r
 def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator):
     base = StreamBatcher(motions, cfg.batch, cfg.window, rng,
                          Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg,
-                                      spine_jitter_deg=cfg.spine_jitter_deg),
+                                      spine_jitter_deg=cfg.spine_jitter_deg, trunk_swap=cfg.trunk_swap),
                          wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost)
     return ParallelBatcher(base, cfg.data_workers, cfg.seed) if cfg.data_workers > 0 else base
 
@@ -963,7 +964,7 @@ def config_from_args(args) -> TrainConfig:
     explicit = set()
     for k in ("budget_minutes", "steps", "stop_after", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
-              "arm_jitter_deg", "spine_jitter_deg", "rare_boost", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor", "data_workers",
+              "arm_jitter_deg", "spine_jitter_deg", "trunk_swap", "rare_boost", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor", "data_workers",
               "eval_every_s"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
@@ -1047,6 +1048,9 @@ def add_arguments(parser) -> None:
                         help="probability that a clip's arms move as in another clip (default 0)")
     parser.add_argument("--arm-jitter", dest="arm_jitter_deg", type=NON_NEGATIVE, default=None,
                         help="slow random shoulder offsets, per-axis sigma in degrees (default 0)")
+    parser.add_argument("--trunk-swap", dest="trunk_swap", type=PROBABILITY, default=None,
+                        help="probability that a clip's whole upper body (spine, neck, head, arms) "
+                             "moves as in another clip (default 0)")
     parser.add_argument("--spine-jitter", dest="spine_jitter_deg", type=NON_NEGATIVE, default=None,
                         help="slow random offsets of the three spine joints, per-axis sigma in "
                              "degrees (default 0)")

@@ -222,6 +222,26 @@ def test_arm_swap_takes_the_donors_arms_and_keeps_the_rest():
     assert np.array_equal(s.foot_contact, w.foot_contact)
 
 
+def test_trunk_swap_takes_the_donors_upper_body_on_the_clips_legs():
+    walk, arms = _two_clips()
+    v = sy.vary_motion(walk, np.random.default_rng(3), sy.Augmentation(trunk_swap=1.0), [arms])
+    T = v.num_frames
+    start = int(np.argmin([np.abs(walk.root_pos[a:a + T] - v.root_pos).max()
+                           for a in range(walk.num_frames - T + 1)]))
+    upper = sy.UPPER_BODY_JOINTS
+    assert set(sy.ARM_JOINTS) < set(upper) and {3, 6, 9, 12, 15} <= set(upper)
+    lower = [j for j in range(24) if j not in upper]
+    assert lower == [0, 1, 2, 4, 5, 7, 8, 10, 11]
+    assert np.array_equal(v.local_rot[:, lower], walk.local_rot[start:start + T, lower])
+    assert np.array_equal(v.local_rot[:, upper], arms.local_rot[:, upper])
+    # the head sensor now follows the donor's trunk; the pelvis and shin sensors and contacts do not
+    s = sy.synthesize(v)
+    w = sy.synthesize(sk.Motion("w", 0, walk.fps, walk.local_rot[start:start + T],
+                                walk.root_pos[start:start + T], walk.offsets))
+    assert np.allclose(s.imu_orientation[:, [0, 3, 4]], w.imu_orientation[:, [0, 3, 4]], atol=1e-6)
+    assert np.array_equal(s.foot_contact, w.foot_contact)
+
+
 def test_arm_jitter_turns_only_the_shoulders_slowly_by_about_sigma():
     walk, _ = _two_clips()
     aug = sy.Augmentation(arm_jitter_deg=8.0)

@@ -77,10 +77,10 @@ def test_command_line_options_reach_the_training_config():
     tr.add_arguments(parser)
     cfg = tr.config_from_args(parser.parse_args(
         ["--pos-weight", "30", "--arm-swap", "0.5", "--arm-jitter", "12", "--lr", "2.5e-4", "--seed", "3",
-         "--rare-boost", "0.5", "--spine-jitter", "6"]))
+         "--rare-boost", "0.5", "--spine-jitter", "6", "--trunk-swap", "0.25"]))
     assert (cfg.w_pos, cfg.arm_swap, cfg.arm_jitter_deg, cfg.lr, cfg.seed, cfg.rare_boost) == \
         (30.0, 0.5, 12.0, 2.5e-4, 3, 0.5)
-    assert cfg.spine_jitter_deg == 6.0
+    assert (cfg.spine_jitter_deg, cfg.trunk_swap) == (6.0, 0.25)
     walk = procedural.make_motion("walk", seconds=4.0, seed=1)
     assert tr.make_batcher([walk], cfg, np.random.default_rng(0)).augment.spine_jitter_deg == 6.0
     default = tr.config_from_args(parser.parse_args([]))
