@@ -738,7 +738,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     budget_s = cfg.budget_minutes * 60.0
     last_eval = last_ckpt = time.time()
     acc, acc_n, t_log = {}, 0, time.time()
-    step_times = []
+    step_times, data_times = [], []
     pbar = None
     if cfg.progress:
         from tqdm import tqdm
@@ -776,6 +776,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             t0 = time.time()
             batch, reset = batcher.next()
             batch = {k: v.to(device) for k, v in batch.items()}
+            data_times.append(time.time() - t0)
             keep = (~reset).to(device).float()[None, :, None]
             h, c = state[0] * keep, state[1] * keep
             for g in opt.param_groups:
@@ -853,8 +854,12 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     if not val:
         _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
     st = np.array(step_times[5:] or step_times)
+    # Both medians over the same steps (a step whose loss stopped the run has no step time).
+    dt = np.array(data_times[:len(step_times)][5:] or data_times[:len(step_times)])
     summary = {"steps": step, "total_steps": total, "epochs": step / steps_per_epoch,
                "s_per_step_median": float(np.median(st)) if st.size else None,
+               # waiting for the batch and moving it to the device: the rest of a step is compute
+               "data_s_per_step_median": float(np.median(dt)) if dt.size else None,
                "frames_per_s": float(cfg.batch * cfg.window / np.median(st)) if st.size else None,
                "parameters": count_parameters(net), "device": str(device), "blas": blas,
                "train_clips": len(batcher.motions), "train_frames": batcher.total_frames,

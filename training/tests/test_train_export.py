@@ -41,6 +41,8 @@ def test_one_epoch_smoke_training_and_resume(tmp_path):
     assert ck["step"] == s1["steps"]
     s2 = tr.train(cfg, train_m, val_m)
     assert s2["steps"] == 40
+    # the data path's share of a step is measured on the same steps, so it cannot exceed the step
+    assert 0 < s2["data_s_per_step_median"] <= s2["s_per_step_median"]
     hist = json.loads((tmp_path / "res" / "train_log.json").read_text())["history"]
     assert hist["val"][-1]["val_loss"] < hist["val"][0]["val_loss"]
     net, _ = export.load_checkpoint(tmp_path / "ck" / "best.pt")
