@@ -196,16 +196,17 @@ def _donor(motion, donors, rng):
 
 
 def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
-    """New arm movements on an existing clip (training only). The 6 h of CMU motion tie each arm
-    pose to the body motion it was captured with, and the network learns those pairings: its
-    error on the training subjects is far below that on new ones, mostly in the unobserved upper
-    arms. With probability `arm_swap` both arms (collars to hands) take their local rotations
-    from a random window of a donor clip; `arm_jitter_deg` adds a slow random rotation to each
-    shoulder, `spine_jitter_deg` to each spine joint (the trunk bends and twists a little
-    otherwise than it did, so its bend must be read from the head and wrist sensors rather than
-    guessed from the legs' motion). With probability `trunk_swap` (drawn before the arm swap,
-    which it then replaces) the whole upper body, spine to head and hands, moves as in the
-    donor's window: a bent-over or twisted trunk on legs that walk, stand or climb. Legs, root and therefore contacts and root velocity are untouched; the sensors are
+    """New arm and trunk movements on an existing clip (training only). The 6 h of CMU motion
+    tie each arm pose to the body motion it was captured with, and the network learns those
+    pairings: its error on the training subjects is far below that on new ones, mostly in the
+    unobserved upper arms. With probability `arm_swap` both arms (collars to hands) take their
+    local rotations from a random window of a donor clip; `arm_jitter_deg` adds a slow random
+    rotation to each shoulder, `spine_jitter_deg` to each spine joint (the trunk bends and
+    twists a little otherwise than it did, so its bend must be read from the head and wrist
+    sensors rather than guessed from the legs' motion). With probability `trunk_swap` (drawn
+    before the arm swap, which it then replaces) the whole upper body, spine to head and hands,
+    moves as in the donor's window: a bent-over or twisted trunk on legs that walk, stand or
+    climb. Legs, root and therefore contacts and root velocity are untouched; the sensors are
     synthesised afterwards from the new pose, so signals and targets stay consistent."""
     if not augment:
         return motion
