@@ -190,8 +190,9 @@ def read_pack(path, fps: float = sk.MODEL_FPS) -> list:
         m = sk.Motion(name=str(c["name"]), subject=int(c["subject"]), fps=float(fps),
                       local_rot=local.astype(np.float32), root_pos=rootpos.astype(np.float32),
                       offsets=np.asarray(c["offsets"], np.float32).reshape(sk.NUM_JOINTS, 3))
-        if m.non_finite_field():
-            raise UsageError(f"{path}: clip {m.name} decodes to non-finite {m.non_finite_field()}")
+        bad = m.non_finite_field()
+        if bad:
+            raise UsageError(f"{path}: clip {m.name} decodes to non-finite {bad}")
         out.append(m)
     return out
 

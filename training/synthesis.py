@@ -216,7 +216,9 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
         donor, swapped = _donor(motion, donors, rng), UPPER_BODY_JOINTS
     elif donors and augment.arm_swap > 0 and rng.random() < augment.arm_swap:
         donor = _donor(motion, donors, rng)
-    if donor is None and augment.arm_jitter_deg <= 0 and augment.spine_jitter_deg <= 0:
+    jitters = [(sigma, joints) for sigma, joints in ((augment.arm_jitter_deg, SHOULDER_JOINTS),
+                                                     (augment.spine_jitter_deg, SPINE_JOINTS)) if sigma > 0]
+    if donor is None and not jitters:
         return motion
     T = motion.num_frames if donor is None else min(motion.num_frames, donor.num_frames)
     a = int(rng.integers(0, motion.num_frames - T + 1))
@@ -224,14 +226,9 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
     if donor is not None:
         b = int(rng.integers(0, donor.num_frames - T + 1))
         local[:, swapped] = np.asarray(donor.local_rot)[b:b + T, swapped]
-    if augment.arm_jitter_deg > 0:
-        off = _smooth_offsets(rng, T, float(motion.fps), augment.arm_jitter_deg,
-                              len(SHOULDER_JOINTS)).astype(local.dtype)
-        local[:, SHOULDER_JOINTS] = local[:, SHOULDER_JOINTS] @ off
-    if augment.spine_jitter_deg > 0:
-        off = _smooth_offsets(rng, T, float(motion.fps), augment.spine_jitter_deg,
-                              len(SPINE_JOINTS)).astype(local.dtype)
-        local[:, SPINE_JOINTS] = local[:, SPINE_JOINTS] @ off
+    for sigma, joints in jitters:
+        off = _smooth_offsets(rng, T, float(motion.fps), sigma, len(joints)).astype(local.dtype)
+        local[:, joints] = local[:, joints] @ off
     return sk.Motion(name=motion.name, subject=motion.subject, fps=motion.fps,
                      local_rot=local, root_pos=np.asarray(motion.root_pos)[a:a + T],
                      offsets=motion.offsets)

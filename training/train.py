@@ -854,8 +854,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     if not val:
         _save(ckpt_dir / "best.pt", net, opt, step, total, cfg, history, best, rng, batcher, state)
     st = np.array(step_times[5:] or step_times)
-    # Both medians over the same steps (a step whose loss stopped the run has no step time).
-    dt = np.array(data_times[:len(step_times)][5:] or data_times[:len(step_times)])
+    dt = np.array(data_times[5:] or data_times)
     summary = {"steps": step, "total_steps": total, "epochs": step / steps_per_epoch,
                "s_per_step_median": float(np.median(st)) if st.size else None,
                # waiting for the batch and moving it to the device: the rest of a step is compute
@@ -969,8 +968,8 @@ def config_from_args(args) -> TrainConfig:
     explicit = set()
     for k in ("budget_minutes", "steps", "stop_after", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
-              "arm_jitter_deg", "spine_jitter_deg", "trunk_swap", "rare_boost", "w_pos", "ckpt_dir", "results_dir", "wrist_sensor", "data_workers",
-              "eval_every_s"):
+              "arm_jitter_deg", "spine_jitter_deg", "trunk_swap", "rare_boost", "w_pos", "ckpt_dir",
+              "results_dir", "wrist_sensor", "data_workers", "eval_every_s"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)

@@ -200,6 +200,24 @@ def _two_clips():
     return walk, arms
 
 
+def _crop_start(clip, varied) -> int:
+    """Where the varied clip's window starts in the clip, found from the root track (kept as is)."""
+    T = varied.num_frames
+    return int(np.argmin([np.abs(clip.root_pos[a:a + T] - varied.root_pos).max()
+                          for a in range(clip.num_frames - T + 1)]))
+
+
+def _window(clip, start, T):
+    return sk.Motion("w", 0, clip.fps, clip.local_rot[start:start + T], clip.root_pos[start:start + T],
+                     clip.offsets)
+
+
+def _turned_deg(clip, varied):
+    """(T,24) angle in degrees by which each joint's local rotation was turned."""
+    rel = np.swapaxes(clip.local_rot, -1, -2) @ varied.local_rot
+    return np.rad2deg(np.linalg.norm(sk.rot_to_axis_angle(rel), axis=-1))
+
+
 def test_arm_swap_takes_the_donors_arms_and_keeps_the_rest():
     walk, arms = _two_clips()
     aug = sy.Augmentation(arm_swap=1.0)
@@ -207,16 +225,13 @@ def test_arm_swap_takes_the_donors_arms_and_keeps_the_rest():
     T = v.num_frames
     assert T == arms.num_frames < walk.num_frames          # cropped to the shorter donor
     # the crop is a window of the original: find its start from the root track
-    start = int(np.argmin([np.abs(walk.root_pos[a:a + T] - v.root_pos).max()
-                           for a in range(walk.num_frames - T + 1)]))
+    start = _crop_start(walk, v)
     assert np.array_equal(v.root_pos, walk.root_pos[start:start + T])
     body = [j for j in range(24) if j not in sy.ARM_JOINTS]
     assert np.array_equal(v.local_rot[:, body], walk.local_rot[start:start + T, body])
     assert np.array_equal(v.local_rot[:, sy.ARM_JOINTS], arms.local_rot[:, sy.ARM_JOINTS])
     # the sensors follow the new arms: the wrists move as the donor's arms on the walker's body
-    s = sy.synthesize(v)
-    w = sy.synthesize(sk.Motion("w", 0, walk.fps, walk.local_rot[start:start + T],
-                                walk.root_pos[start:start + T], walk.offsets))
+    s, w = sy.synthesize(v), sy.synthesize(_window(walk, start, T))
     assert np.abs(s.imu_orientation[:, 1:3] - w.imu_orientation[:, 1:3]).max() > 0.1
     assert np.allclose(s.imu_orientation[:, [0, 3, 4, 5]], w.imu_orientation[:, [0, 3, 4, 5]], atol=1e-6)
     assert np.array_equal(s.foot_contact, w.foot_contact)
@@ -225,9 +240,7 @@ def test_arm_swap_takes_the_donors_arms_and_keeps_the_rest():
 def test_trunk_swap_takes_the_donors_upper_body_on_the_clips_legs():
     walk, arms = _two_clips()
     v = sy.vary_motion(walk, np.random.default_rng(3), sy.Augmentation(trunk_swap=1.0), [arms])
-    T = v.num_frames
-    start = int(np.argmin([np.abs(walk.root_pos[a:a + T] - v.root_pos).max()
-                           for a in range(walk.num_frames - T + 1)]))
+    T, start = v.num_frames, _crop_start(walk, v)
     upper = sy.UPPER_BODY_JOINTS
     assert set(sy.ARM_JOINTS) < set(upper) and {3, 6, 9, 12, 15} <= set(upper)
     lower = [j for j in range(24) if j not in upper]
@@ -235,9 +248,7 @@ def test_trunk_swap_takes_the_donors_upper_body_on_the_clips_legs():
     assert np.array_equal(v.local_rot[:, lower], walk.local_rot[start:start + T, lower])
     assert np.array_equal(v.local_rot[:, upper], arms.local_rot[:, upper])
     # the head sensor now follows the donor's trunk; the pelvis and shin sensors and contacts do not
-    s = sy.synthesize(v)
-    w = sy.synthesize(sk.Motion("w", 0, walk.fps, walk.local_rot[start:start + T],
-                                walk.root_pos[start:start + T], walk.offsets))
+    s, w = sy.synthesize(v), sy.synthesize(_window(walk, start, T))
     assert np.allclose(s.imu_orientation[:, [0, 3, 4]], w.imu_orientation[:, [0, 3, 4]], atol=1e-6)
     assert np.array_equal(s.foot_contact, w.foot_contact)
 
@@ -246,8 +257,7 @@ def test_arm_jitter_turns_only_the_shoulders_slowly_by_about_sigma():
     walk, _ = _two_clips()
     aug = sy.Augmentation(arm_jitter_deg=8.0)
     v = sy.vary_motion(walk, np.random.default_rng(4), aug)
-    rel = np.swapaxes(walk.local_rot, -1, -2) @ v.local_rot
-    ang = np.rad2deg(np.linalg.norm(sk.rot_to_axis_angle(rel), axis=-1))      # (T,24)
+    ang = _turned_deg(walk, v)
     others = [j for j in range(24) if j not in sy.SHOULDER_JOINTS]
     assert ang[:, others].max() < 1e-3
     assert 3.0 < ang[:, sy.SHOULDER_JOINTS].mean() < 25.0
@@ -257,8 +267,7 @@ def test_arm_jitter_turns_only_the_shoulders_slowly_by_about_sigma():
 def test_spine_jitter_bends_only_the_spine_and_moves_the_upper_sensors():
     walk, _ = _two_clips()
     v = sy.vary_motion(walk, np.random.default_rng(6), sy.Augmentation(spine_jitter_deg=6.0))
-    rel = np.swapaxes(walk.local_rot, -1, -2) @ v.local_rot
-    ang = np.rad2deg(np.linalg.norm(sk.rot_to_axis_angle(rel), axis=-1))      # (T,24)
+    ang = _turned_deg(walk, v)
     others = [j for j in range(24) if j not in sy.SPINE_JOINTS]
     assert ang[:, others].max() < 1e-3
     assert 2.0 < ang[:, sy.SPINE_JOINTS].mean() < 20.0
