@@ -39,7 +39,7 @@ extern "C" {
 #  define MOCAP_API
 #endif
 
-#define MOCAP_API_VERSION 4
+#define MOCAP_API_VERSION 5
 #define MOCAP_SENSOR_COUNT 6
 #define MOCAP_PATH_MAX 260
 
@@ -249,10 +249,13 @@ typedef struct mocap_session_stats {
     uint64_t bytes_dropped;       /* input bytes lost because processing was too slow */
     uint64_t reconnects;
     uint64_t capture_bytes_written;
+    uint64_t replay_chunks_skipped; /* replay: damaged chunks of the capture passed over (what
+                                       they held is missing from the frames) */
     int32_t connection_state;     /* mocap_connection_state */
     int32_t capture_error;        /* mocap_status of the capture writer (0 = fine) */
     uint32_t sensors_seen_mask;   /* bit s: the sensor of segment s produced a sample */
-    uint32_t reserved;
+    int32_t replay_tail_damaged;  /* replay: 1 once the capture turned out to end in a damaged or
+                                     incomplete chunk (a recording cut short), else 0 */
     char last_error[256];         /* last asynchronous error (device lost, disk full ...) */
 } mocap_session_stats;
 

@@ -420,7 +420,7 @@ static void serial_close(transport *t)
     free(port);
 }
 
-static const transport_ops serial_ops = {serial_read, serial_reopen, serial_close};
+static const transport_ops serial_ops = {serial_read, serial_reopen, serial_close, NULL};
 
 mocap_status transport_open_serial(const char *path, uint32_t baud, transport **out)
 {

@@ -56,6 +56,8 @@ struct mocap_session {
     mocap_atomic_u64 bytes_dropped;
     mocap_atomic_u64 frames_dropped;
     mocap_atomic_u64 reconnects;
+    mocap_atomic_u64 replay_chunks_skipped;
+    mocap_atomic_int replay_tail_damaged;
 
     /* Guarded by lock. */
     mocap_mutex *lock;
@@ -125,6 +127,18 @@ static void queue_end_of_stream(mocap_session *s)
     }
 }
 
+/* A replay passes over damaged chunks as it must (a crash-damaged capture is still worth
+ * replaying), so the stats are where a consumer learns that the frames miss part of the file. */
+static void note_source_damage(mocap_session *s)
+{
+    if (!s->source->ops->damage) return;
+    uint64_t skipped = 0;
+    int32_t tail = 0;
+    s->source->ops->damage(s->source, &skipped, &tail);
+    mocap_atomic_store_u64(&s->replay_chunks_skipped, skipped);
+    mocap_atomic_store_int(&s->replay_tail_damaged, tail);
+}
+
 static void reader_loop(mocap_session *s)
 {
     uint8_t overflow[BYTE_CHUNK_CAPACITY];
@@ -167,6 +181,7 @@ static void reader_loop(mocap_session *s)
         int64_t receive_ns = 0;
         mocap_status st = transport_read(s->source, target, BYTE_CHUNK_CAPACITY, READ_TIMEOUT_MS,
                                          &got, &receive_ns);
+        note_source_damage(s);
         if (st == MOCAP_OK) {
             mocap_atomic_add_u64(&s->bytes_received, got);
             if (chunk) {
@@ -595,6 +610,8 @@ mocap_status mocap_session_get_stats(mocap_session *s, mocap_session_stats *out)
     out->bytes_dropped = mocap_atomic_load_u64(&s->bytes_dropped);
     out->frames_dropped = mocap_atomic_load_u64(&s->frames_dropped);
     out->reconnects = mocap_atomic_load_u64(&s->reconnects);
+    out->replay_chunks_skipped = mocap_atomic_load_u64(&s->replay_chunks_skipped);
+    out->replay_tail_damaged = mocap_atomic_load_int(&s->replay_tail_damaged);
     out->connection_state = mocap_atomic_load_int(&s->connection_state);
     return MOCAP_OK;
 }

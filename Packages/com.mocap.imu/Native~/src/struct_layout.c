@@ -67,10 +67,11 @@ static const mocap_field_layout layout_table[] = {
     FIELD_ROW(mocap_session_stats, bytes_dropped),
     FIELD_ROW(mocap_session_stats, reconnects),
     FIELD_ROW(mocap_session_stats, capture_bytes_written),
+    FIELD_ROW(mocap_session_stats, replay_chunks_skipped),
     FIELD_ROW(mocap_session_stats, connection_state),
     FIELD_ROW(mocap_session_stats, capture_error),
     FIELD_ROW(mocap_session_stats, sensors_seen_mask),
-    FIELD_ROW(mocap_session_stats, reserved),
+    FIELD_ROW(mocap_session_stats, replay_tail_damaged),
     FIELD_ROW(mocap_session_stats, last_error),
 
     STRUCT_ROW(mocap_sensor_quality),

@@ -23,6 +23,9 @@ typedef struct transport_ops {
     /* Try once to open the device again after a disconnect. */
     mocap_status (*reopen)(transport *t);
     void (*close)(transport *t);
+    /* Replay only (NULL for devices): damaged chunks passed over so far, and whether the file
+     * turned out to end in a damaged or incomplete chunk. Called by the reading thread. */
+    void (*damage)(const transport *t, uint64_t *chunks_skipped, int32_t *tail_damaged);
 } transport_ops;
 
 struct transport {

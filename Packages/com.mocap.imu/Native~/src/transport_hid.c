@@ -258,7 +258,7 @@ static void hid_close_transport(transport *t)
     free(port);
 }
 
-static const transport_ops hid_ops = {hid_read_bytes, hid_reopen, hid_close_transport};
+static const transport_ops hid_ops = {hid_read_bytes, hid_reopen, hid_close_transport, NULL};
 
 mocap_status transport_open_hid(const char *path, uint16_t vendor_id, uint16_t product_id,
                                 transport **out)

@@ -112,7 +112,14 @@ static void replay_close(transport *t)
     free(r);
 }
 
-static const transport_ops replay_ops = {replay_read, replay_reopen, replay_close};
+static void replay_damage(const transport *t, uint64_t *chunks_skipped, int32_t *tail_damaged)
+{
+    const replay_transport *r = (const replay_transport *)t;
+    *chunks_skipped = capture_reader_skipped(r->reader);
+    *tail_damaged = capture_reader_tail(r->reader) ? 1 : 0;
+}
+
+static const transport_ops replay_ops = {replay_read, replay_reopen, replay_close, replay_damage};
 
 mocap_status transport_open_replay(const char *path, int realtime, double speed, transport **out)
 {

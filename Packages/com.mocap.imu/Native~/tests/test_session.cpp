@@ -648,6 +648,47 @@ TEST(Session, StopReturnsAFailedLastFlush)
                           "18: second stop differs, 19: size beyond the limit";
 }
 
+// A replay passes over damaged chunks and a cut-off end (it must: a crash-damaged capture is
+// still worth replaying); the stats say so, so a consumer can tell the frames miss part of it.
+TEST(Session, ReplayStatsCountDamagedChunksAndACutEnd)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 29;
+    cfg.motion_s = 3.0;
+    const std::string clean = test_temp_path("clean.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, clean.c_str(), nullptr),
+              MOCAP_OK) << mocap_last_error();
+    std::vector<uint8_t> bytes = read_file_bytes(clean);
+    ASSERT_GT(bytes.size(), 200000u);
+    for (size_t k = 0; k < 3; ++k) bytes[bytes.size() / 3 + k * 30000] ^= 0xff;  // three chunks
+    bytes.resize(bytes.size() - 100);                                          // and a cut end
+    const std::string damaged = test_temp_path("damaged.cap");
+    write_file_bytes(damaged, bytes);
+
+    auto replay_to_end = [](const std::string &path, mocap_session_stats &stats) {
+        mocap_session_config config = replay_config(path);
+        SessionCloser session;
+        ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+        ASSERT_EQ(mocap_session_start(session.s), MOCAP_OK);
+        ASSERT_TRUE(wait_until(session.s, 30, nullptr, [](const mocap_session_stats &st) {
+            return st.connection_state == MOCAP_CONNECTION_ENDED;
+        }));
+        ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
+    };
+    mocap_session_stats whole, part;
+    replay_to_end(clean, whole);
+    replay_to_end(damaged, part);
+    EXPECT_EQ(whole.replay_chunks_skipped, 0u);
+    EXPECT_EQ(whole.replay_tail_damaged, 0);
+    EXPECT_EQ(part.replay_chunks_skipped, 3u);
+    EXPECT_EQ(part.replay_tail_damaged, 1);
+    // What could be read was replayed, and the loss is not an error that ended the replay.
+    EXPECT_GT(part.frames_emitted, whole.frames_emitted / 2);
+    EXPECT_LT(part.bytes_received, whole.bytes_received);
+    EXPECT_STREQ(part.last_error, "");
+}
+
 // A replay that meets a long stretch of plausible fake chunk headers (tens of seconds of 64 KiB
 // reads and CRCs to skip) still stops promptly: the skipping happens in bounded slices.
 TEST(Session, StopIsPromptWhileAReplaySkipsALongDamagedStretch)

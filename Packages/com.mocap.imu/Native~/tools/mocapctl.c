@@ -482,27 +482,19 @@ static void report_dropped(mocap_session *session, mocap_solver *solver, int32_t
             what, frames, poses, bytes, remedy);
 }
 
-/* The replay skips damaged chunks and a cut-off end without a word (the reader resynchronises,
- * as it must for a crash-damaged file); say so after the run, so that output made from part of
- * a capture is not taken for the whole. Reads the capture's chunk structure once more (fast). */
-static void report_capture_damage(const char *capture)
+/* The replay skips damaged chunks and a cut-off end, as it must for a crash-damaged file; say
+ * so after the run, so that output made from part of a capture is not taken for the whole. */
+static void report_capture_damage(mocap_session *session, const char *capture)
 {
-    capture_reader *r = NULL;
-    if (capture_reader_open(capture, &r) != MOCAP_OK) return;
-    int64_t ns;
-    const uint8_t *data;
-    size_t len;
-    while (capture_reader_next(r, &ns, &data, &len) == MOCAP_OK) {
-    }
-    const uint64_t skipped = capture_reader_skipped(r);
-    const int tail = capture_reader_tail(r);
-    if (skipped > 0)
+    mocap_session_stats stats;
+    if (mocap_session_get_stats(session, &stats) != MOCAP_OK) return;
+    if (stats.replay_chunks_skipped > 0)
         fprintf(stderr, "mocapctl: warning: capture %s: %llu damaged chunk(s) were skipped; what they "
-                        "held is missing from the results\n", capture, (unsigned long long)skipped);
-    if (tail)
+                        "held is missing from the results\n",
+                capture, (unsigned long long)stats.replay_chunks_skipped);
+    if (stats.replay_tail_damaged)
         fprintf(stderr, "mocapctl: warning: capture %s ends in a damaged or incomplete chunk (a "
                         "recording cut short?); its last records are missing from the results\n", capture);
-    capture_reader_close(r);
 }
 
 /* Drains available frames; returns 1 at the end of the stream. */
@@ -674,7 +666,7 @@ static int cmd_replay(int argc, char **argv)
         printf("  bone orientation error against the generator's truth (motion phase): worst sensor "
                "mean %.3f deg\n", worst_mean);
     rc = replay_ended_early(st->session);
-    report_capture_damage(capture);
+    report_capture_damage(st->session, capture);
     report_dropped(st->session, NULL, 0, "the replay",
                    "a replay without --realtime waits instead of dropping");
     if (close_output(&st->csv, csv_path)) rc = 1;
@@ -1317,7 +1309,7 @@ static int cmd_replay_pose(int argc, char **argv)
     if (written == 0) fprintf(stderr, "mocapctl: no pose was solved (calibration %s)\n",
                               cal_failed ? "refused" : "missing");
     if (replay_ended_early(session)) rc = 1;
-    report_capture_damage(capture);
+    report_capture_damage(session, capture);
     report_dropped(session, solver, character, "the replay",
                    "a replay without --realtime waits instead of dropping");
     if (report_inference_failures(solver)) rc = 1;
@@ -1788,7 +1780,7 @@ static int cmd_stream(int argc, char **argv)
     /* A replay whose file stopped reading part way streamed less than the capture holds. */
     for (int i = 0; !port && i < nrep; ++i) {
         if (replay_ended_early(sessions[i])) rc = 1;
-        report_capture_damage(replays[i]);
+        report_capture_damage(sessions[i], replays[i]);
     }
     for (int i = 0; i < characters; ++i) {
         char what[32];

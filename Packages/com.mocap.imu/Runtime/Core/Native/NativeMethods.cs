@@ -27,7 +27,7 @@ namespace Mocap.Imu
         internal const string Library = "mocap_imu";
 
         /// <summary>MOCAP_API_VERSION these bindings mirror.</summary>
-        internal const int ApiVersion = 4;
+        internal const int ApiVersion = 5;
 
         internal const int SensorCount = 6;
         internal const int PathMax = 260;

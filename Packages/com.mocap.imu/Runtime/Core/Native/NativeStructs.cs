@@ -247,13 +247,20 @@ namespace Mocap.Imu
         [NativeName("bytes_dropped")] public ulong BytesDropped;
         [NativeName("reconnects")] public ulong Reconnects;
         [NativeName("capture_bytes_written")] public ulong CaptureBytesWritten;
+        /// <summary>Replay: damaged chunks of the capture passed over; what they held is missing
+        /// from the frames.</summary>
+        [NativeName("replay_chunks_skipped")] public ulong ReplayChunksSkipped;
         [NativeName("connection_state")] public MocapConnectionState ConnectionState;
         /// <summary>Status of the capture writer (<see cref="MocapStatus.Ok"/> when fine).</summary>
         [NativeName("capture_error")] public MocapStatus CaptureError;
         /// <summary>Bit s: the sensor of segment s has produced a sample.</summary>
         [NativeName("sensors_seen_mask")] public uint SensorsSeenMask;
-        [NativeName("reserved")] private uint _reserved;
+        [NativeName("replay_tail_damaged")] private int _replayTailDamaged;
         [NativeName("last_error")] private fixed byte _lastError[256];
+
+        /// <summary>Replay: the capture turned out to end in a damaged or incomplete chunk (a
+        /// recording cut short), so its last records are missing from the frames.</summary>
+        public bool ReplayTailDamaged => _replayTailDamaged != 0;
 
         /// <summary>The last asynchronous error (device lost, disk full ...), or "". Allocates.</summary>
         public string LastError

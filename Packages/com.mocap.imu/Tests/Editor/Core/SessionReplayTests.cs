@@ -287,6 +287,32 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual(0x3Fu, stats.SensorsSeenMask);
             Assert.AreEqual(MocapConnectionState.Ended, stats.ConnectionState);
             Assert.AreEqual(MocapStatus.Ok, stats.CaptureError);
+            Assert.AreEqual(0ul, stats.ReplayChunksSkipped);
+            Assert.IsFalse(stats.ReplayTailDamaged);
+        }
+
+        [Test]
+        public void StatsSayWhatADamagedCaptureLeftOut()
+        {
+            // Three damaged chunks and a cut-off end: the replay passes over them (a crash-damaged
+            // capture is still worth replaying) and the stats say what is missing.
+            var bytes = File.ReadAllBytes(_capture.CapturePath);
+            Assert.Greater(bytes.Length, 200000);
+            for (int k = 0; k < 3; k++) bytes[bytes.Length / 3 + k * 30000] ^= 0xff;
+            Array.Resize(ref bytes, bytes.Length - 100);
+            var damaged = new SynthCapture
+            {
+                CapturePath = Path.Combine(TestPaths.NewTempDirectory("damaged"), "damaged.cap"),
+                TruthPath = _capture.TruthPath,
+            };
+            File.WriteAllBytes(damaged.CapturePath, bytes);
+            var run = Replay.Run(damaged);
+            Assert.IsTrue(run.ReachedEndOfStream);
+            Assert.AreEqual(3ul, run.Stats.ReplayChunksSkipped);
+            Assert.IsTrue(run.Stats.ReplayTailDamaged);
+            Assert.AreEqual("", run.Stats.LastError, "the damage is not an error that ended the replay");
+            Assert.Less(run.Stats.BytesReceived, _run.Stats.BytesReceived);
+            Assert.Greater(run.Frames.Count, _run.Frames.Count / 2, "what could be read was replayed");
         }
 
         [Test]
