@@ -113,6 +113,7 @@ INPUTS = {
               ("init_from", "file", "--init-from")],
     "evaluate": [("bvh", "bvh_or_pack", "--bvh"), ("checkpoint", "file", "--checkpoint"),
                  ("models", "files", "--models")],
+    "sensor-gain": [("bvh", "bvh_or_pack", "--bvh"), ("checkpoint", "file", "--checkpoint")],
     "export": [("checkpoint", "file", "--checkpoint")],
     "average": [("checkpoints", "files", "checkpoint")],
     "synth-capture": [("bvh", "file", "BVH")],

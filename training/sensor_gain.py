@@ -1,0 +1,228 @@
+"""sensor-gain: how much of the pose model's error one more sensor could take away, per place.
+
+    python3 -m training sensor-gain [--split val | --bvh DIR] [--checkpoint CKPT] [--out DIR]
+        [--max-clips N] [--max-seconds S] [--seed 0] [--noise realistic|none]
+
+Six sensors leave the spine's bend and the upper arms to the network, and that is where most of
+its position error is (training/results/evaluation.md, per joint). Before anyone adds a seventh
+sensor, this answers "where would it help most, and by how much", without training a model for
+each place: the clips are synthesised and predicted exactly as `evaluate` does, then each
+candidate bone's global orientation is replaced by the truth while every other bone keeps the
+orientation the model gave it, and the errors are measured again.
+
+It is an estimate of one kind of gain, not a promise in either direction: a real sensor has
+mounting and noise errors (the model would get the bone to within a few degrees, not exactly),
+while a network trained with that sensor would also improve the bones next to it (the rest of
+the spine, the collars), which this keeps as they are.
+
+Writes OUT/sensor_gain.md: the position and angle error with each candidate known, overall and
+per subject, beside the model as it is.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from . import skeleton as sk
+
+# Where a seventh (or eighth) sensor could go: label -> the joints whose bone it would report.
+# A sensor on a segment reports that segment's global orientation, which is its joint's
+# (the upper arm turns with the shoulder joint, the chest with spine3).
+CANDIDATES = {
+    "chest": ("spine3",),
+    "whole spine (3 bones)": ("spine1", "spine2", "spine3"),
+    "left upper arm": ("left_shoulder",),
+    "right upper arm": ("right_shoulder",),
+    "both upper arms (8 sensors)": ("left_shoulder", "right_shoulder"),
+    "chest and both upper arms (9 sensors)": ("spine3", "left_shoulder", "right_shoulder"),
+}
+
+
+def global_rotations(local_rot) -> np.ndarray:
+    """(T,24,3,3) local rotations (joint 0 global) -> global rotations."""
+    g, _ = sk.forward_kinematics(local_rot, np.zeros(local_rot.shape[:-3] + (3,)))
+    return g
+
+
+def with_known_bones(pred_local, true_local, joints, known=None) -> np.ndarray:
+    """The predicted pose with the bones of `joints` turned to their true global orientation (or
+    to `known`, (T,len(joints),3,3): what a sensor reports of them) and every other bone kept at
+    its predicted global orientation; returned as local rotations."""
+    g = global_rotations(pred_local).copy()
+    joints = list(joints)
+    if joints:
+        g[:, joints] = global_rotations(true_local)[:, joints] if known is None else known
+    local = g.copy()
+    for j, p in enumerate(sk.PARENTS):
+        if p >= 0:
+            local[:, j] = np.swapaxes(g[:, p], -1, -2) @ g[:, j]
+    return local
+
+
+def as_sensed(bones, rng, augment) -> np.ndarray:
+    """bones (T,k,3,3) global orientations as sensors with synthesis.Augmentation's orientation
+    errors would report them (the errors the model's own sensors get in evaluation): a fixed
+    mounting error on the bone side, a fixed yaw of the sensor's world, noise per frame."""
+    from .synthesis import _ry, _small_rotations
+    T, k = bones.shape[:2]
+    mount = _small_rotations(rng, k, augment.mounting_deg)
+    drift = np.stack([_ry(a) for a in np.deg2rad(
+        rng.uniform(-augment.heading_drift_deg, augment.heading_drift_deg, k))])
+    noise = _small_rotations(rng, T * k, augment.orientation_noise_deg).reshape(T, k, 3, 3)
+    return np.einsum("kab,tkbc,kcd->tkad", drift, bones, mount) @ noise
+
+
+def pose_errors(local_rot, true_local, offsets) -> tuple:
+    """Per frame: mean local joint angle error (deg) and mean root-aligned position error (cm)."""
+    from .evaluate import root_aligned_positions, rotation_angle_deg
+    ang = rotation_angle_deg(local_rot, true_local).mean(axis=1)
+    _, p = root_aligned_positions(local_rot, offsets)
+    _, t = root_aligned_positions(true_local, offsets)
+    return ang, np.linalg.norm(p - t, axis=-1).mean(axis=1) * 100.0
+
+
+def joint_indices(names) -> list:
+    return [sk.JOINT_NAMES.index(n) for n in names]
+
+
+def measure(clips, preds, candidates=CANDIDATES, augment=None, rng=None) -> dict:
+    """label -> {"angle", "pos": frame means, "pos_sensed": pos with the bones as sensors with
+    `augment`'s errors report them (None: exact), "subjects": {subject: pos}}; the model as it is
+    under "model"."""
+    sets = {"model": []}
+    sets.update({label: joint_indices(names) for label, names in candidates.items()})
+    rng = np.random.default_rng(0) if rng is None else rng
+    zero = {"frames": 0, "angle": 0.0, "pos": 0.0, "pos_sensed": 0.0, "subjects": {}}
+    sums = {label: dict(zero, subjects={}) for label in sets}
+    for clip, pred in zip(clips, preds):
+        g_true = global_rotations(clip.local_rot)
+        for label, joints in sets.items():
+            s = sums[label]
+            if joints:
+                local = with_known_bones(pred.local_rot, clip.local_rot, joints)
+                sensed = g_true[:, joints] if augment is None else as_sensed(g_true[:, joints], rng, augment)
+                _, pos_sensed = pose_errors(with_known_bones(pred.local_rot, clip.local_rot, joints, sensed),
+                                            clip.local_rot, clip.offsets)
+            else:
+                local = pred.local_rot
+            ang, pos = pose_errors(local, clip.local_rot, clip.offsets)
+            s["frames"] += len(pos)
+            s["angle"] += float(ang.sum())
+            s["pos"] += float(pos.sum())
+            s["pos_sensed"] += float((pos_sensed if joints else pos).sum())
+            n, total = s["subjects"].get(clip.subject, (0, 0.0))
+            s["subjects"][clip.subject] = (n + len(pos), total + float(pos.sum()))
+    out = {}
+    for label, s in sums.items():
+        n = max(s["frames"], 1)
+        out[label] = {"angle": s["angle"] / n, "pos": s["pos"] / n, "pos_sensed": s["pos_sensed"] / n,
+                      "subjects": {k: v[1] / max(v[0], 1) for k, v in sorted(s["subjects"].items())}}
+    return out
+
+
+def write_report(out_dir, results, meta) -> Path:
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    model = results["model"]
+    lines = [
+        "# Where one more sensor would help: a kinematic estimate",
+        "",
+        f"{meta['clips']} clips ({meta['source']}, {meta['seconds'] / 60:.1f} min), inputs synthesised "
+        f"{meta['noise']} (seed {meta['seed']}), PyTorch checkpoint `{meta['checkpoint']}` (mirror-averaged, "
+        "as exported). For each candidate, the bones it names get their true global orientation and every "
+        "other bone keeps what the model gave it (`python3 -m training sensor-gain`; the module docstring "
+        "says what this estimate leaves out).",
+        "",
+        "*pos, sensed*: the same with the known bones as a sensor with the evaluation's orientation "
+        "errors reports them (mounting, world yaw, noise), the errors the six sensors get here. "
+        "Angles are of local rotations: a bone set right below a parent still as predicted gets a "
+        "local rotation off by the parent's error, so the angle can rise while positions improve "
+        "(a network trained with the sensor would make the two agree).",
+        "",
+        "| sensor added | bones it reports | angle deg | pos cm | pos gain cm | pos gain % | pos, sensed cm |",
+        "|---|---|---|---|---|---|---|",
+        f"| none (the model as it is) | - | {model['angle']:.2f} | {model['pos']:.2f} | - | - | - |",
+    ]
+    for label, names in meta["candidates"].items():
+        r = results[label]
+        gain = model["pos"] - r["pos"]
+        share = f"{100.0 * gain / model['pos']:.0f}" if model["pos"] > 0 else "-"
+        lines.append(f"| {label} | {', '.join(names)} | {r['angle']:.2f} | {r['pos']:.2f} | {gain:.2f} | "
+                     f"{share} | {r['pos_sensed']:.2f} |")
+    subjects = list(model["subjects"])
+    if len(subjects) > 1:
+        lines += ["", "## Position error by subject (cm)", "",
+                  "| sensor added | " + " | ".join(f"subject {s}" if s else "unknown" for s in subjects) + " |",
+                  "|---|" + "---|" * len(subjects)]
+        for label in ["model"] + list(meta["candidates"]):
+            name = "none (the model as it is)" if label == "model" else label
+            lines.append(f"| {name} | " + " | ".join(f"{results[label]['subjects'][s]:.2f}" for s in subjects) + " |")
+    path = out_dir / "sensor_gain.md"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def sensor_gain(motions, checkpoint, out_dir, seed=0, source="", noise="realistic",
+                candidates=CANDIDATES) -> dict:
+    from . import evaluate as ev
+    from .cli import UsageError
+    if not motions:
+        raise UsageError("no motions to measure")
+    for m in motions:
+        if m.num_frames == 0:
+            raise UsageError(f"motion {m.name}: no frames to measure")
+    net = ev.load_torch_model(checkpoint, mirror=True)
+    wrist = ev.expected_wrist_sensor(checkpoint)
+    rng = np.random.default_rng(seed)
+    clips = [ev.synthesize_clip(m, rng, wrist, noise) for m in motions]
+    preds = ev.predict_torch(net, clips)
+    results = measure(clips, preds, candidates, ev.eval_augmentation(noise), np.random.default_rng(seed + 1))
+    meta = {"clips": len(clips), "source": source, "seed": seed, "candidates": dict(candidates),
+            "seconds": sum(c.local_rot.shape[0] / c.fps for c in clips),
+            "noise": ev._NOISE_WORDS[noise], "checkpoint": ev._shown_path(checkpoint)}
+    return {"results": results, "report": write_report(out_dir, results, meta)}
+
+
+def add_arguments(p):
+    from .cli import NON_NEGATIVE_INT, POSITIVE_INT
+    from .evaluate import _POSITIVE_SECONDS, NOISE_CHOICES, RESULTS_DIR
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--split", default="val", choices=["train", "val", "test"],
+                     help="train / val / test of the CMU data (default val)")
+    src.add_argument("--bvh", help="a folder of BVH files instead (any depth), or a motion pack")
+    p.add_argument("--checkpoint", default=None,
+                   help="PyTorch checkpoint (default: as evaluate, the shipped weights without a local run)")
+    p.add_argument("--out", default=str(RESULTS_DIR), help="where sensor_gain.md goes")
+    p.add_argument("--max-clips", type=POSITIVE_INT, default=0, help="the first N clips")
+    p.add_argument("--max-seconds", type=_POSITIVE_SECONDS, default=0.0, help="cut clips to this length")
+    p.add_argument("--seed", type=NON_NEGATIVE_INT, default=0)
+    p.add_argument("--noise", default="realistic", choices=NOISE_CHOICES,
+                   help="sensor errors of the synthesised inputs (default realistic)")
+    p.add_argument("--no-cache", action="store_true", help="do not cache converted BVH clips")
+    return p
+
+
+def main(args=None) -> int:
+    if args is None or isinstance(args, list):
+        args = add_arguments(argparse.ArgumentParser(prog="python3 -m training sensor-gain")).parse_args(args)
+    from . import dataset
+    from . import evaluate as ev
+    from .cli import CommandError
+    ckpt = args.checkpoint or ev.find_checkpoint()
+    if ckpt is None:
+        raise CommandError("no checkpoint found; pass --checkpoint")
+    source = f"BVH folder {args.bvh}" if args.bvh else f"split {args.split}"
+    motions = dataset.load_motions(Path(args.bvh) if args.bvh else args.split, cache=not args.no_cache)
+    motions = ev._trim(motions, args.max_clips, args.max_seconds)
+    print(f"sensor-gain: {len(motions)} clips ({source}); PyTorch {ev._shown_path(ckpt)}")
+    r = sensor_gain(motions, ckpt, args.out, args.seed, source, args.noise)
+    model = r["results"]["model"]
+    print(f"{'none (the model as it is)':40s} angle {model['angle']:6.2f} deg  pos {model['pos']:6.2f} cm")
+    for label in CANDIDATES:
+        s = r["results"][label]
+        print(f"{label:40s} angle {s['angle']:6.2f} deg  pos {s['pos']:6.2f} cm  "
+              f"(-{model['pos'] - s['pos']:.2f} cm; sensed {s['pos_sensed']:6.2f} cm)")
+    print(f"sensor-gain: wrote {r['report']}")
+    return 0
