@@ -61,25 +61,13 @@ def with_known_bones(pred_local, true_local, joints, known=None) -> np.ndarray:
     return local
 
 
-def as_sensed(bones, rng, augment) -> np.ndarray:
-    """bones (T,k,3,3) global orientations as sensors with synthesis.Augmentation's orientation
-    errors would report them (the errors the model's own sensors get in evaluation): a fixed
-    mounting error on the bone side, a fixed yaw of the sensor's world, noise per frame."""
-    from .synthesis import _ry, _small_rotations
-    T, k = bones.shape[:2]
-    mount = _small_rotations(rng, k, augment.mounting_deg)
-    drift = np.stack([_ry(a) for a in np.deg2rad(
-        rng.uniform(-augment.heading_drift_deg, augment.heading_drift_deg, k))])
-    noise = _small_rotations(rng, T * k, augment.orientation_noise_deg).reshape(T, k, 3, 3)
-    return np.einsum("kab,tkbc,kcd->tkad", drift, bones, mount) @ noise
-
-
-def pose_errors(local_rot, true_local, offsets) -> tuple:
-    """Per frame: mean local joint angle error (deg) and mean root-aligned position error (cm)."""
+def pose_errors(local_rot, true_local, offsets, true_positions=None) -> tuple:
+    """Per frame: mean local joint angle error (deg) and mean root-aligned position error (cm).
+    true_positions: the truth's root-aligned positions, when already at hand."""
     from .evaluate import root_aligned_positions, rotation_angle_deg
     ang = rotation_angle_deg(local_rot, true_local).mean(axis=1)
     _, p = root_aligned_positions(local_rot, offsets)
-    _, t = root_aligned_positions(true_local, offsets)
+    t = root_aligned_positions(true_local, offsets)[1] if true_positions is None else true_positions
     return ang, np.linalg.norm(p - t, axis=-1).mean(axis=1) * 100.0
 
 
@@ -91,23 +79,28 @@ def measure(clips, preds, candidates=CANDIDATES, augment=None, rng=None) -> dict
     """label -> {"angle", "pos": frame means, "pos_sensed": pos with the bones as sensors with
     `augment`'s errors report them (None: exact), "subjects": {subject: pos}}; the model as it is
     under "model"."""
+    from .evaluate import root_aligned_positions
+    from .synthesis import with_orientation_errors
     sets = {"model": []}
     sets.update({label: joint_indices(names) for label, names in candidates.items()})
     rng = np.random.default_rng(0) if rng is None else rng
-    zero = {"frames": 0, "angle": 0.0, "pos": 0.0, "pos_sensed": 0.0, "subjects": {}}
-    sums = {label: dict(zero, subjects={}) for label in sets}
+    sums = {label: {"frames": 0, "angle": 0.0, "pos": 0.0, "pos_sensed": 0.0, "subjects": {}}
+            for label in sets}
     for clip, pred in zip(clips, preds):
-        g_true = global_rotations(clip.local_rot)
+        g_true, p_true = root_aligned_positions(clip.local_rot, clip.offsets)
+        def errors(local):
+            return pose_errors(local, clip.local_rot, clip.offsets, p_true)
         for label, joints in sets.items():
             s = sums[label]
             if joints:
                 local = with_known_bones(pred.local_rot, clip.local_rot, joints)
-                sensed = g_true[:, joints] if augment is None else as_sensed(g_true[:, joints], rng, augment)
-                _, pos_sensed = pose_errors(with_known_bones(pred.local_rot, clip.local_rot, joints, sensed),
-                                            clip.local_rot, clip.offsets)
+                sensed = g_true[:, joints]
+                if augment is not None:
+                    sensed = with_orientation_errors(sensed, rng, augment)[0]
+                _, pos_sensed = errors(with_known_bones(pred.local_rot, clip.local_rot, joints, sensed))
             else:
                 local = pred.local_rot
-            ang, pos = pose_errors(local, clip.local_rot, clip.offsets)
+            ang, pos = errors(local)
             s["frames"] += len(pos)
             s["angle"] += float(ang.sum())
             s["pos"] += float(pos.sum())

@@ -159,6 +159,20 @@ def _small_rotations(rng, n, sigma_deg) -> np.ndarray:
     return sk.axis_angle_to_rot(rng.normal(scale=np.deg2rad(sigma_deg), size=(n, 3)))
 
 
+def with_orientation_errors(bones, rng, augment) -> tuple:
+    """bones (T,n,3,3) global orientations as n sensors with `augment`'s orientation errors report
+    them: a fixed mounting error on the bone side, a fixed yaw of each sensor's world, noise per
+    frame. Returns (orientations, the per-sensor world yaws (n,3,3), which turn the accelerations
+    too)."""
+    T, n = bones.shape[:2]
+    mount = _small_rotations(rng, n, augment.mounting_deg)
+    drift = np.stack([_ry(a) for a in np.deg2rad(
+        rng.uniform(-augment.heading_drift_deg, augment.heading_drift_deg, n))])
+    ori = np.einsum("sab,tsbc,scd->tsad", drift, bones, mount)
+    noise = _small_rotations(rng, T * n, augment.orientation_noise_deg).reshape(T, n, 3, 3)
+    return ori @ noise, drift
+
+
 def _hold_drops(rng, x: np.ndarray, rate: float, max_len: int) -> np.ndarray:
     """x (T,6,...): per sensor, drop-outs hold the last sample."""
     T = x.shape[0]
@@ -274,13 +288,8 @@ def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K,
     ori = bone.copy()
     if augment:
         n = 6
-        mount = _small_rotations(rng, n, augment.mounting_deg)                      # (6,3,3)
-        drift = np.stack([_ry(a) for a in np.deg2rad(
-            rng.uniform(-augment.heading_drift_deg, augment.heading_drift_deg, n))])
-        ori = np.einsum("sab,tsbc,scd->tsad", drift, ori, mount)
+        ori, drift = with_orientation_errors(ori, rng, augment)
         T = ori.shape[0]
-        noise = _small_rotations(rng, T * n, augment.orientation_noise_deg).reshape(T, n, 3, 3)
-        ori = ori @ noise
         acc = np.einsum("sab,tsb->tsa", drift, acc)
         acc = acc + rng.uniform(-augment.acc_bias, augment.acc_bias, size=(1, n, 3))
         acc = acc + rng.normal(scale=augment.acc_noise, size=acc.shape)

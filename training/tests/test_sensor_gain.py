@@ -9,6 +9,7 @@ from training import procedural
 from training import sensor_gain as sg
 from training import skeleton as sk
 from training.model import ModelConfig, PoseNet
+from training.synthesis import with_orientation_errors
 
 
 def _poses_wrong_at(bones):
@@ -71,7 +72,7 @@ def test_sensed_bones_carry_the_sensor_errors_and_exact_ones_none():
     # a few degrees on two upper arms: some error comes back, far less than the model's
     assert 0.05 < noisy["both"]["pos_sensed"] < 0.5 * noisy["model"]["pos"]
     g = sg.global_rotations(truth)[:, [16, 17]]
-    sensed = sg.as_sensed(g, np.random.default_rng(4), ev.eval_augmentation("realistic"))
+    sensed, _ = with_orientation_errors(g, np.random.default_rng(4), ev.eval_augmentation("realistic"))
     angle = ev.rotation_angle_deg(sensed, g)
     assert 0.3 < angle.mean() < 12.0
 
