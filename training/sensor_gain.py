@@ -21,23 +21,34 @@ per subject, beside the model as it is.
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from . import skeleton as sk
 
-# Where a seventh (or eighth) sensor could go: label -> the joints whose bone it would report.
-# A sensor on a segment reports that segment's global orientation, which is its joint's
-# (the upper arm turns with the shoulder joint, the chest with spine3).
+@dataclass(frozen=True)
+class Candidate:
+    """A place for one more sensor: the joints whose bone it reports (a sensor on a segment
+    reports that segment's global orientation, which is its joint's: the upper arm turns with the
+    shoulder joint, the chest with spine3). spread_spine: the bend between the pelvis and a known
+    chest is shared evenly by the three spine joints, the simplest guess a network could make
+    from the two, instead of left as the model predicted it."""
+    bones: tuple
+    spread_spine: bool = False
+
+
 CANDIDATES = {
-    "chest": ("spine3",),
-    "whole spine (3 bones)": ("spine1", "spine2", "spine3"),
-    "left upper arm": ("left_shoulder",),
-    "right upper arm": ("right_shoulder",),
-    "both upper arms (8 sensors)": ("left_shoulder", "right_shoulder"),
-    "chest and both upper arms (9 sensors)": ("spine3", "left_shoulder", "right_shoulder"),
+    "chest": Candidate(("spine3",)),
+    "chest, bend shared evenly by the spine": Candidate(("spine3",), spread_spine=True),
+    "whole spine (3 bones)": Candidate(("spine1", "spine2", "spine3")),
+    "left upper arm": Candidate(("left_shoulder",)),
+    "right upper arm": Candidate(("right_shoulder",)),
+    "both upper arms (8 sensors)": Candidate(("left_shoulder", "right_shoulder")),
+    "chest and both upper arms (9 sensors)": Candidate(("spine3", "left_shoulder", "right_shoulder")),
 }
+SPINE = [3, 6, 9]
 
 
 def global_rotations(local_rot) -> np.ndarray:
@@ -46,14 +57,20 @@ def global_rotations(local_rot) -> np.ndarray:
     return g
 
 
-def with_known_bones(pred_local, true_local, joints, known=None) -> np.ndarray:
+def with_known_bones(pred_local, true_local, joints, known=None, spread_spine=False) -> np.ndarray:
     """The predicted pose with the bones of `joints` turned to their true global orientation (or
     to `known`, (T,len(joints),3,3): what a sensor reports of them) and every other bone kept at
-    its predicted global orientation; returned as local rotations."""
+    its predicted global orientation; returned as local rotations. spread_spine: the spine's
+    three joints then share the turn from the pelvis to spine3 evenly (Candidate)."""
     g = global_rotations(pred_local).copy()
     joints = list(joints)
     if joints:
         g[:, joints] = global_rotations(true_local)[:, joints] if known is None else known
+    if spread_spine:
+        bend = sk.rot_to_axis_angle(np.swapaxes(g[:, 0], -1, -2) @ g[:, SPINE[-1]])
+        third = sk.axis_angle_to_rot(bend / 3.0)
+        g[:, SPINE[0]] = g[:, 0] @ third
+        g[:, SPINE[1]] = g[:, SPINE[0]] @ third
     local = g.copy()
     for j, p in enumerate(sk.PARENTS):
         if p >= 0:
@@ -81,8 +98,8 @@ def measure(clips, preds, candidates=CANDIDATES, augment=None, rng=None) -> dict
     under "model"."""
     from .evaluate import root_aligned_positions
     from .synthesis import with_orientation_errors
-    sets = {"model": []}
-    sets.update({label: joint_indices(names) for label, names in candidates.items()})
+    sets = {"model": Candidate(())}
+    sets.update(candidates)
     rng = np.random.default_rng(0) if rng is None else rng
     sums = {label: {"frames": 0, "angle": 0.0, "pos": 0.0, "pos_sensed": 0.0, "subjects": {}}
             for label in sets}
@@ -90,14 +107,15 @@ def measure(clips, preds, candidates=CANDIDATES, augment=None, rng=None) -> dict
         g_true, p_true = root_aligned_positions(clip.local_rot, clip.offsets)
         def errors(local):
             return pose_errors(local, clip.local_rot, clip.offsets, p_true)
-        for label, joints in sets.items():
+        for label, candidate in sets.items():
             s = sums[label]
+            joints, spread = joint_indices(candidate.bones), candidate.spread_spine
             if joints:
-                local = with_known_bones(pred.local_rot, clip.local_rot, joints)
+                local = with_known_bones(pred.local_rot, clip.local_rot, joints, spread_spine=spread)
                 sensed = g_true[:, joints]
                 if augment is not None:
                     sensed = with_orientation_errors(sensed, rng, augment)[0]
-                _, pos_sensed = errors(with_known_bones(pred.local_rot, clip.local_rot, joints, sensed))
+                _, pos_sensed = errors(with_known_bones(pred.local_rot, clip.local_rot, joints, sensed, spread))
             else:
                 local = pred.local_rot
             ang, pos = errors(local)
@@ -138,7 +156,8 @@ def write_report(out_dir, results, meta) -> Path:
         "|---|---|---|---|---|---|---|",
         f"| none (the model as it is) | - | {model['angle']:.2f} | {model['pos']:.2f} | - | - | - |",
     ]
-    for label, names in meta["candidates"].items():
+    for label, candidate in meta["candidates"].items():
+        names = candidate.bones
         r = results[label]
         gain = model["pos"] - r["pos"]
         share = f"{100.0 * gain / model['pos']:.0f}" if model["pos"] > 0 else "-"

@@ -29,7 +29,7 @@ def _poses_wrong_at(bones):
 def test_known_bones_take_the_truth_and_leave_the_other_bones_as_predicted():
     pred, truth = _poses_wrong_at(range(24))
     g_pred, g_true = sg.global_rotations(pred), sg.global_rotations(truth)
-    arms = sg.joint_indices(sg.CANDIDATES["both upper arms (8 sensors)"])
+    arms = sg.joint_indices(sg.CANDIDATES["both upper arms (8 sensors)"].bones)
     assert arms == [16, 17]
     g = sg.global_rotations(sg.with_known_bones(pred, truth, arms))
     # (the procedural rotations are float32: orthonormal to ~1e-7)
@@ -57,13 +57,30 @@ def test_a_known_upper_arm_removes_the_error_that_bone_makes():
     assert list(moved) == [18, 20, 22]
 
 
+def test_a_spread_spine_shares_the_bend_to_a_known_chest_evenly():
+    pred, truth = _poses_wrong_at([3, 6, 9])
+    local = sg.with_known_bones(pred, truth, [9], spread_spine=True)
+    g, g_true, g_pred = sg.global_rotations(local), sg.global_rotations(truth), sg.global_rotations(pred)
+    np.testing.assert_allclose(g[:, 9], g_true[:, 9], atol=1e-5)     # the chest as sensed
+    np.testing.assert_allclose(g[:, 0], g_pred[:, 0], atol=1e-5)     # the pelvis as predicted
+    # the three spine joints turn by the same local rotation, which makes up the pelvis-chest turn
+    np.testing.assert_allclose(local[:, 3], local[:, 6], atol=1e-6)
+    np.testing.assert_allclose(local[:, 6], local[:, 9], atol=1e-6)
+    np.testing.assert_allclose(g[:, 0] @ local[:, 3] @ local[:, 3] @ local[:, 3], g_true[:, 9], atol=1e-5)
+    # the neck, head and arms keep their predicted global orientation
+    np.testing.assert_allclose(g[:, 12:], g_pred[:, 12:], atol=1e-5)
+    # without spreading, spine1 and spine2 stay as predicted
+    kept = sg.global_rotations(sg.with_known_bones(pred, truth, [9]))
+    np.testing.assert_allclose(kept[:, [3, 6]], g_pred[:, [3, 6]], atol=1e-5)
+
+
 def test_sensed_bones_carry_the_sensor_errors_and_exact_ones_none():
     pred, truth = _poses_wrong_at([16, 17])
     T = len(truth)
     clip = ev.Clip("c", 60.0, np.asarray(sk.DEFAULT_OFFSETS, np.float64), np.zeros((T, 6, 3, 3)),
                    np.zeros((T, 6, 3)), truth, np.zeros((T, 3)), subject=7)
     p = ev.Prediction(pred, np.zeros((T, 3)))
-    arms = {"both": ("left_shoulder", "right_shoulder")}
+    arms = {"both": sg.Candidate(("left_shoulder", "right_shoulder"))}
     exact = sg.measure([clip], [p], arms, ev.eval_augmentation("none"))
     assert exact["model"]["pos"] > 1.0 and exact["both"]["pos"] < 1e-3
     assert exact["both"]["pos_sensed"] == pytest.approx(exact["both"]["pos"], abs=1e-6)
