@@ -16,7 +16,7 @@ while a network trained with that sensor would also improve the bones next to it
 the spine, the collars), which this keeps as they are.
 
 Writes OUT/sensor_gain.md: the position and angle error with each candidate known, overall and
-per subject, beside the model as it is.
+per subject, beside the model as it is; OUT/sensor_gain.png: the position errors as bars.
 """
 from __future__ import annotations
 
@@ -176,6 +176,27 @@ def write_report(out_dir, results, meta) -> Path:
     return path
 
 
+def write_plot(out_dir, results, candidates) -> Path:
+    """Position error per candidate, exact and as sensed, beside the model and the target."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from .evaluate import TARGETS, _finish_plot
+    labels = ["none (the model as it is)"] + list(candidates)
+    keys = ["model"] + list(candidates)
+    y = np.arange(len(labels))[::-1]
+    fig, ax = plt.subplots(figsize=(8, 0.45 * len(labels) + 1.5))
+    ax.barh(y + 0.2, [results[k]["pos"] for k in keys], 0.4, label="bones exact")
+    ax.barh(y - 0.2, [results[k]["pos_sensed"] for k in keys], 0.4, label="bones as a sensor reports them")
+    ax.axvline(TARGETS["pos"], color="k", ls="--", lw=1, label=f"target {TARGETS['pos']:g} cm")
+    ax.set_yticks(y)
+    ax.set_yticklabels(labels, fontsize=8)
+    path = Path(out_dir) / "sensor_gain.png"
+    _finish_plot(fig, ax, "mean joint position error, roots aligned (cm)", "",
+                 "Where one more sensor would help (kinematic estimate)", path)
+    return path
+
+
 def sensor_gain(motions, checkpoint, out_dir, seed=0, source="", noise="realistic",
                 candidates=CANDIDATES) -> dict:
     from . import evaluate as ev
@@ -194,7 +215,8 @@ def sensor_gain(motions, checkpoint, out_dir, seed=0, source="", noise="realisti
     meta = {"clips": len(clips), "source": source, "seed": seed, "candidates": dict(candidates),
             "seconds": sum(c.local_rot.shape[0] / c.fps for c in clips),
             "noise": ev._NOISE_WORDS[noise], "checkpoint": ev._shown_path(checkpoint)}
-    return {"results": results, "report": write_report(out_dir, results, meta)}
+    report = write_report(out_dir, results, meta)
+    return {"results": results, "report": report, "plot": write_plot(out_dir, results, candidates)}
 
 
 def add_arguments(p):
@@ -236,5 +258,5 @@ def main(args=None) -> int:
         s = r["results"][label]
         print(f"{label:40s} angle {s['angle']:6.2f} deg  pos {s['pos']:6.2f} cm  "
               f"(-{model['pos'] - s['pos']:.2f} cm; sensed {s['pos_sensed']:6.2f} cm)")
-    print(f"sensor-gain: wrote {r['report']}")
+    print(f"sensor-gain: wrote {r['report']} and {r['plot'].name}")
     return 0

@@ -115,6 +115,7 @@ def test_the_command_reports_every_candidate_per_subject(tmp_path, fixture_dir, 
     # an untrained network is wrong everywhere: two known bones beat one
     assert float(rows["both upper arms (8 sensors)"][4]) < float(rows["left upper arm"][4])
     assert "## Position error by subject (cm)" in text
+    assert (out / "sensor_gain.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "wrote" in capsys.readouterr().out
 
 
