@@ -181,7 +181,7 @@ def write_plot(out_dir, results, candidates) -> Path:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from .evaluate import TARGETS, _finish_plot
+    from .evaluate import TARGETS
     labels = ["none (the model as it is)"] + list(candidates)
     keys = ["model"] + list(candidates)
     y = np.arange(len(labels))[::-1]
@@ -191,9 +191,13 @@ def write_plot(out_dir, results, candidates) -> Path:
     ax.axvline(TARGETS["pos"], color="k", ls="--", lw=1, label=f"target {TARGETS['pos']:g} cm")
     ax.set_yticks(y)
     ax.set_yticklabels(labels, fontsize=8)
+    ax.set_xlabel("mean joint position error, roots aligned (cm)")
+    ax.set_title("Where one more sensor would help (kinematic estimate)")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3)   # below: no bar hidden
+    fig.tight_layout()
     path = Path(out_dir) / "sensor_gain.png"
-    _finish_plot(fig, ax, "mean joint position error, roots aligned (cm)", "",
-                 "Where one more sensor would help (kinematic estimate)", path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
     return path
 
 
