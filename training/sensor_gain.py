@@ -62,20 +62,24 @@ def with_known_bones(pred_local, true_local, joints, known=None, spread_spine=Fa
     to `known`, (T,len(joints),3,3): what a sensor reports of them) and every other bone kept at
     its predicted global orientation; returned as local rotations. spread_spine: the spine's
     three joints then share the turn from the pelvis to spine3 evenly (Candidate)."""
-    g = global_rotations(pred_local).copy()
     joints = list(joints)
+    if known is None and joints:
+        known = global_rotations(true_local)[:, joints]
+    return _with_known_globals(global_rotations(pred_local), joints, known, spread_spine)
+
+
+def _with_known_globals(g_pred, joints, known, spread_spine) -> np.ndarray:
+    """with_known_bones on the predicted global rotations, which a caller trying several
+    candidates on one clip computes once."""
+    g = g_pred.copy()
     if joints:
-        g[:, joints] = global_rotations(true_local)[:, joints] if known is None else known
+        g[:, joints] = known
     if spread_spine:
         bend = sk.rot_to_axis_angle(np.swapaxes(g[:, 0], -1, -2) @ g[:, SPINE[-1]])
         third = sk.axis_angle_to_rot(bend / 3.0)
         g[:, SPINE[0]] = g[:, 0] @ third
         g[:, SPINE[1]] = g[:, SPINE[0]] @ third
-    local = g.copy()
-    for j, p in enumerate(sk.PARENTS):
-        if p >= 0:
-            local[:, j] = np.swapaxes(g[:, p], -1, -2) @ g[:, j]
-    return local
+    return sk.global_to_local(g)
 
 
 def pose_errors(local_rot, true_local, offsets, true_positions=None) -> tuple:
@@ -98,33 +102,35 @@ def measure(clips, preds, candidates=CANDIDATES, augment=None, rng=None) -> dict
     under "model"."""
     from .evaluate import root_aligned_positions
     from .synthesis import with_orientation_errors
-    sets = {"model": Candidate(())}
-    sets.update(candidates)
     rng = np.random.default_rng(0) if rng is None else rng
     sums = {label: {"frames": 0, "angle": 0.0, "pos": 0.0, "pos_sensed": 0.0, "subjects": {}}
-            for label in sets}
+            for label in ["model", *candidates]}
+
+    def add(label, subject, ang, pos, pos_sensed):
+        s = sums[label]
+        s["frames"] += len(pos)
+        s["angle"] += float(ang.sum())
+        s["pos"] += float(pos.sum())
+        s["pos_sensed"] += float(pos_sensed.sum())
+        n, total = s["subjects"].get(subject, (0, 0.0))
+        s["subjects"][subject] = (n + len(pos), total + float(pos.sum()))
+
     for clip, pred in zip(clips, preds):
         g_true, p_true = root_aligned_positions(clip.local_rot, clip.offsets)
+        g_pred = global_rotations(pred.local_rot)
+
         def errors(local):
             return pose_errors(local, clip.local_rot, clip.offsets, p_true)
-        for label, candidate in sets.items():
-            s = sums[label]
+        ang, pos = errors(pred.local_rot)
+        add("model", clip.subject, ang, pos, pos)
+        for label, candidate in candidates.items():
             joints, spread = joint_indices(candidate.bones), candidate.spread_spine
-            if joints:
-                local = with_known_bones(pred.local_rot, clip.local_rot, joints, spread_spine=spread)
-                sensed = g_true[:, joints]
-                if augment is not None:
-                    sensed = with_orientation_errors(sensed, rng, augment)[0]
-                _, pos_sensed = errors(with_known_bones(pred.local_rot, clip.local_rot, joints, sensed, spread))
-            else:
-                local = pred.local_rot
-            ang, pos = errors(local)
-            s["frames"] += len(pos)
-            s["angle"] += float(ang.sum())
-            s["pos"] += float(pos.sum())
-            s["pos_sensed"] += float((pos_sensed if joints else pos).sum())
-            n, total = s["subjects"].get(clip.subject, (0, 0.0))
-            s["subjects"][clip.subject] = (n + len(pos), total + float(pos.sum()))
+            ang, pos = errors(_with_known_globals(g_pred, joints, g_true[:, joints], spread))
+            sensed = g_true[:, joints]
+            if augment is not None:
+                sensed = with_orientation_errors(sensed, rng, augment)[0]
+            _, pos_sensed = errors(_with_known_globals(g_pred, joints, sensed, spread))
+            add(label, clip.subject, ang, pos, pos_sensed)
     out = {}
     for label, s in sums.items():
         n = max(s["frames"], 1)
