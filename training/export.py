@@ -220,12 +220,21 @@ def check_failures(report: dict) -> list:
     return out
 
 
+def require_exportable(net, what: str) -> None:
+    """A UsageError for a network the engine cannot run: the contract's state is an LSTM's."""
+    if net.config.core != "lstm":
+        raise UsageError(f"{what} is a {net.config.core} network (train --size tip, for the architecture "
+                         f"comparison); the engine's model contract carries LSTM state only, so it "
+                         f"cannot be exported; nothing written")
+
+
 def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True) -> dict:
     """Write out_dir/FP32_NAME and FP16_NAME: both as temporaries beside them, checked (check and
     ONNX Runtime available), then moved over the previous files. A failed check raises
     ExportCheckError and leaves the previous files untouched. Non-finite weights are refused
     before anything is written: unlike the ONNX Runtime check, this one always runs (--no-check,
     or no ONNX Runtime, would otherwise install a model that outputs NaN)."""
+    require_exportable(net, "the network")
     bad = non_finite_tensors(net.state_dict())
     if bad:
         raise ExportCheckError(f"the network's weights hold NaN or inf ({bad}); nothing written")
@@ -269,6 +278,7 @@ def main(args) -> int:
             raise UsageError(f"no checkpoint at {ckpt} (train first; re-export the shipped weights "
                              f"with --checkpoint training/checkpoints/mocap_pose.pt; or pass --untrained)")
         net, ck = load_checkpoint(ckpt)
+        require_exportable(net, str(ckpt))
         name = f"mocap-pose lstm{net.state_layers}x{net.state_size}"
         if not getattr(args, "no_mirror", False):
             net = MirrorEnsemble(net).eval()

@@ -62,7 +62,11 @@ CKPT_DIR = REPO / "training" / "data" / "checkpoints"
 RESULTS_DIR = REPO / "training" / "results"
 
 SIZES = {"tiny": ModelConfig(32, 32, 1, 32), "small": ModelConfig(256, 256, 2, 256), "medium": ModelConfig(256, 384, 2, 256),
-         "large": ModelConfig(256, 512, 2, 256)}
+         "large": ModelConfig(256, 512, 2, 256),
+         # The seed system's TIP class, for the architecture comparison: its core (4 causal
+         # attention blocks of 16 heads, feed-forward 1024, 40-frame window, then a tanh RNN of
+         # 512) between this project's frame MLP and heads. Not exportable to the engine.
+         "tip": ModelConfig(256, 512, 1, 256, core="transformer", window=40, blocks=4, heads=16, ff=1024)}
 
 
 @dataclass
@@ -893,7 +897,8 @@ def _option(key: str) -> str:
 
 
 def _size_dims(cfg: ModelConfig) -> tuple:
-    return cfg.embed, cfg.hidden, cfg.layers, cfg.head
+    dims = (cfg.core, cfg.embed, cfg.hidden, cfg.layers, cfg.head)
+    return dims + ((cfg.window, cfg.blocks, cfg.heads, cfg.ff) if cfg.core == "transformer" else ())
 
 
 def saved_train_config(ck, path="the checkpoint") -> TrainConfig:
@@ -985,6 +990,10 @@ def config_from_args(args) -> TrainConfig:
     if getattr(args, "val_bvh", None):
         cfg.val_source = args.val_bvh
         explicit.add("val_source")
+    if "init_from" in explicit and "size" in explicit:
+        # The weights bring their own network; a --size beside them would be silently ignored.
+        raise UsageError("--init-from starts from the network those weights belong to (its size and "
+                         "core); --size cannot be combined with it")
     if cfg.smoke:
         # --smoke trains on procedural motions: a data option would be ignored, while the log
         # recorded it as the run's data.
@@ -1033,7 +1042,7 @@ def add_arguments(parser) -> None:
                         help="start from these weights (e.g. training/checkpoints/mocap_pose.pt)")
     parser.add_argument("--device", default=None, choices=["auto", "cpu", "cuda"])
     parser.add_argument("--smoke", action="store_true", help="tiny procedural run (seconds)")
-    parser.add_argument("--size", default=None, choices=sorted(SIZES), help="model size (default medium)")
+    parser.add_argument("--size", default=None, choices=sorted(SIZES), help="model size (default medium; tip: a network of the seed system's TIP class, causal windowed attention + RNN, for comparison only)")
     parser.add_argument("--eval-every", dest="eval_every_s", type=POSITIVE, default=None,
                         help="seconds between validations, each a chance to write best.pt (default 180)")
     parser.add_argument("--data-workers", dest="data_workers", type=NON_NEGATIVE_INT, default=None,

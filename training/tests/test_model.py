@@ -69,14 +69,19 @@ def _streamed(net, o, a):
     return tuple(torch.cat([p[i] for p in parts], dim=1) for i in range(3)), state
 
 
-def test_streaming_equals_whole_clip():
-    net = _trained_like()
-    o, a = _inputs(seconds=0.5)
+def _assert_streaming_equals_whole(net, o, a):
+    """Frame by frame equals the whole clip in one call: (whole clip's outputs, streamed state)."""
     with torch.no_grad():
         whole = net(o, a)
     streamed, state = _streamed(net, o, a)
     for i in range(3):
         assert torch.allclose(streamed[i], whole[i], atol=1e-5)
+    return whole, state
+
+
+def test_streaming_equals_whole_clip():
+    o, a = _inputs(seconds=0.5)
+    whole, state = _assert_streaming_equals_whole(_trained_like(), o, a)
     assert torch.allclose(state[0], whole[3][0], atol=1e-5)
 
 
