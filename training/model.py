@@ -101,11 +101,7 @@ class ModelConfig:
             if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < 1:
                 raise ValueError(f"{k} {v!r}: expected a positive integer")
         if d.get("core") == "transformer":
-            get = lambda k: d.get(k, known[k].default)
-            if get("embed") % get("heads"):
-                raise ValueError(f"embed {get('embed')} is not a multiple of heads {get('heads')}")
-            if get("window") < 2:
-                raise ValueError(f"window {get('window')}: a frame must see at least one frame before it")
+            check_attention_dims(*(d.get(k, known[k].default) for k in ("embed", "heads", "window")))
         dropout = d.get("dropout", 0.0)
         if isinstance(dropout, bool) or not isinstance(dropout, numbers.Real) or not 0.0 <= dropout < 1.0:
             raise ValueError(f"dropout {dropout!r}: expected a number in [0, 1)")
@@ -113,6 +109,17 @@ class ModelConfig:
 
 
 CORES = ("lstm", "transformer")
+
+
+def check_attention_dims(embed: int, heads: int, window: int) -> None:
+    """ValueError for a transformer core that cannot be built: heads must split the width, and a
+    frame must see at least one frame before it."""
+    if embed % heads:
+        raise ValueError(f"embed {embed} is not a multiple of heads {heads}")
+    if window < 2:
+        raise ValueError(f"window {window}: a frame must see at least one frame before it")
+
+
 DEFAULT_CONFIG = ModelConfig()
 STATE_LAYERS = DEFAULT_CONFIG.layers
 STATE_SIZE = DEFAULT_CONFIG.hidden
@@ -237,10 +244,7 @@ class WindowedTransformerCore(nn.Module):
 
     def __init__(self, c: ModelConfig):
         super().__init__()
-        if c.embed % c.heads:
-            raise ValueError(f"embed {c.embed} is not a multiple of heads {c.heads}")
-        if c.window < 2:
-            raise ValueError(f"window {c.window}: a frame must see at least one frame before it")
+        check_attention_dims(c.embed, c.heads, c.window)
         self.past = c.window - 1
         self.blocks = nn.ModuleList(_WindowedAttentionBlock(c.embed, c.heads, c.ff, c.window)
                                     for _ in range(c.blocks))
