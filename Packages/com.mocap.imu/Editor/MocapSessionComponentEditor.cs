@@ -153,10 +153,7 @@ namespace Mocap.Imu.Editor
                     var lastError = stats.LastError;
                     if (!string.IsNullOrEmpty(lastError)) EditorGUILayout.HelpBox(lastError, MessageType.Warning);
                     if (stats.ReplayChunksSkipped > 0 || stats.ReplayTailDamaged)
-                        EditorGUILayout.HelpBox(
-                            $"The capture is damaged ({stats.ReplayChunksSkipped} chunk(s) skipped" +
-                            (stats.ReplayTailDamaged ? ", cut short at the end" : "") +
-                            "): what it held there is missing from the poses.", MessageType.Warning);
+                        EditorGUILayout.HelpBox(stats.ReplayDamage, MessageType.Warning);
                     var calibration = session.Calibration;
                     EditorGUILayout.LabelField("Calibration", calibration.IsComplete ? "complete"
                         : $"heading {SensorMask(calibration.HeadingMask)}, T-pose {SensorMask(calibration.ValidMask)}");

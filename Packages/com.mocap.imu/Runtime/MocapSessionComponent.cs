@@ -527,10 +527,8 @@ namespace Mocap.Imu
                 var error = stats.LastError;
                 if (!string.IsNullOrEmpty(error)) text.Append("\n  ").Append(error);
                 // A replay passes over damage silently; the poses then miss part of the capture.
-                if (stats.ReplayChunksSkipped > 0)
-                    text.Append("\n  capture damaged: ").Append(stats.ReplayChunksSkipped)
-                        .Append(" chunk(s) skipped, their motion is missing");
-                if (stats.ReplayTailDamaged) text.Append("\n  capture cut short: its last records are missing");
+                if (stats.ReplayChunksSkipped > 0 || stats.ReplayTailDamaged)
+                    text.Append("\n  ").Append(stats.ReplayDamage);
                 // Inference runs on the engine's thread: its failures are only visible here.
                 var solved = _engine.Solver.GetStats(c);
                 if (solved.RunFailures > 0)

@@ -262,6 +262,22 @@ namespace Mocap.Imu
         /// recording cut short), so its last records are missing from the frames.</summary>
         public bool ReplayTailDamaged => _replayTailDamaged != 0;
 
+        /// <summary>Replay: what the damage passed over means for the poses, in one sentence, or
+        /// "" for an undamaged capture. The component's status text and its inspector both show
+        /// this, so they say the same thing. Allocates only for a damaged capture.</summary>
+        public string ReplayDamage
+        {
+            get
+            {
+                bool tail = ReplayTailDamaged;
+                if (ReplayChunksSkipped == 0)
+                    return tail ? "The capture is cut short: its last records are missing from the poses." : "";
+                return $"The capture is damaged: {ReplayChunksSkipped} chunk(s) passed over"
+                       + (tail ? " and its end cut short" : "")
+                       + "; what they held is missing from the poses.";
+            }
+        }
+
         /// <summary>The last asynchronous error (device lost, disk full ...), or "". Allocates.</summary>
         public string LastError
         {

@@ -289,6 +289,7 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual(MocapStatus.Ok, stats.CaptureError);
             Assert.AreEqual(0ul, stats.ReplayChunksSkipped);
             Assert.IsFalse(stats.ReplayTailDamaged);
+            Assert.AreEqual("", stats.ReplayDamage);
         }
 
         [Test]
@@ -311,8 +312,30 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual(3ul, run.Stats.ReplayChunksSkipped);
             Assert.IsTrue(run.Stats.ReplayTailDamaged);
             Assert.AreEqual("", run.Stats.LastError, "the damage is not an error that ended the replay");
+            Assert.AreEqual("The capture is damaged: 3 chunk(s) passed over and its end cut short; "
+                            + "what they held is missing from the poses.", run.Stats.ReplayDamage);
             Assert.Less(run.Stats.BytesReceived, _run.Stats.BytesReceived);
             Assert.Greater(run.Frames.Count, _run.Frames.Count / 2, "what could be read was replayed");
+        }
+
+        [Test]
+        public void StatsTellACutShortCaptureFromAnInnerDamagedOne()
+        {
+            // A recording that stopped mid-chunk (a crash) is whole up to its end: only the tail
+            // is missing, and the wording must not claim chunks were passed over.
+            var bytes = File.ReadAllBytes(_capture.CapturePath);
+            Array.Resize(ref bytes, bytes.Length - 100);
+            var cut = new SynthCapture
+            {
+                CapturePath = Path.Combine(TestPaths.NewTempDirectory("cut"), "cut.cap"),
+                TruthPath = _capture.TruthPath,
+            };
+            File.WriteAllBytes(cut.CapturePath, bytes);
+            var run = Replay.Run(cut);
+            Assert.AreEqual(0ul, run.Stats.ReplayChunksSkipped);
+            Assert.IsTrue(run.Stats.ReplayTailDamaged);
+            Assert.AreEqual("The capture is cut short: its last records are missing from the poses.",
+                            run.Stats.ReplayDamage);
         }
 
         [Test]
