@@ -297,17 +297,13 @@ namespace Mocap.Imu.Tests
         {
             // Three damaged chunks and a cut-off end: the replay passes over them (a crash-damaged
             // capture is still worth replaying) and the stats say what is missing.
-            var bytes = File.ReadAllBytes(_capture.CapturePath);
-            Assert.Greater(bytes.Length, 200000);
-            for (int k = 0; k < 3; k++) bytes[bytes.Length / 3 + k * 30000] ^= 0xff;
-            Array.Resize(ref bytes, bytes.Length - 100);
-            var damaged = new SynthCapture
+            var run = ReplayAlteredCopy("damaged", bytes =>
             {
-                CapturePath = Path.Combine(TestPaths.NewTempDirectory("damaged"), "damaged.cap"),
-                TruthPath = _capture.TruthPath,
-            };
-            File.WriteAllBytes(damaged.CapturePath, bytes);
-            var run = Replay.Run(damaged);
+                Assert.Greater(bytes.Length, 200000);
+                for (int k = 0; k < 3; k++) bytes[bytes.Length / 3 + k * 30000] ^= 0xff;
+                Array.Resize(ref bytes, bytes.Length - 100);
+                return bytes;
+            });
             Assert.IsTrue(run.ReachedEndOfStream);
             Assert.AreEqual(3ul, run.Stats.ReplayChunksSkipped);
             Assert.IsTrue(run.Stats.ReplayTailDamaged);
@@ -323,19 +319,27 @@ namespace Mocap.Imu.Tests
         {
             // A recording that stopped mid-chunk (a crash) is whole up to its end: only the tail
             // is missing, and the wording must not claim chunks were passed over.
-            var bytes = File.ReadAllBytes(_capture.CapturePath);
-            Array.Resize(ref bytes, bytes.Length - 100);
-            var cut = new SynthCapture
+            var run = ReplayAlteredCopy("cut", bytes =>
             {
-                CapturePath = Path.Combine(TestPaths.NewTempDirectory("cut"), "cut.cap"),
-                TruthPath = _capture.TruthPath,
-            };
-            File.WriteAllBytes(cut.CapturePath, bytes);
-            var run = Replay.Run(cut);
+                Array.Resize(ref bytes, bytes.Length - 100);
+                return bytes;
+            });
             Assert.AreEqual(0ul, run.Stats.ReplayChunksSkipped);
             Assert.IsTrue(run.Stats.ReplayTailDamaged);
             Assert.AreEqual("The capture is cut short: its last records are missing from the poses.",
                             run.Stats.ReplayDamage);
+        }
+
+        /// <summary>Replays a copy of the shared capture whose bytes <paramref name="alter"/> changed.</summary>
+        ReplayResult ReplayAlteredCopy(string name, Func<byte[], byte[]> alter)
+        {
+            var copy = new SynthCapture
+            {
+                CapturePath = Path.Combine(TestPaths.NewTempDirectory(name), name + ".cap"),
+                TruthPath = _capture.TruthPath,
+            };
+            File.WriteAllBytes(copy.CapturePath, alter(File.ReadAllBytes(_capture.CapturePath)));
+            return Replay.Run(copy);
         }
 
         [Test]
