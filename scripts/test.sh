@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs every test suite of the project and ends with one line "N passed, N failed".
+# Runs every test suite of the project and ends with one line "N passed, N failed, N skipped".
 #   engine:       ctest on a normal build, an ASan+UBSan build and (threading suites) a TSan build
 #   fuzz:         the HiPNUC decoder and the capture / calibration file readers under
 #                 libFuzzer for a bounded time
@@ -7,31 +7,75 @@
 #   dotnet:       the C# core's NUnit tests against the real native library, and a C# 9 syntax
 #                 check of every file of the Unity package (the Unity glue cannot be compiled here),
 #                 which also fails a component or settings field shown in the inspector without a tooltip
-#   python:       pytest over training/ (when it has tests)
+#   python:       pytest over training/
 #   unity package: pytest over scripts/tests (.meta generator and package linter, incl. a lint
 #                 of the real package: run scripts/unity_meta.py after adding files)
-# Environment: MOCAP_FUZZ_SECONDS (default 60), MOCAP_SKIP_SANITIZERS=1 for a quick local run.
+# The counts are honest (scripts/test_results.py reads every runner's results):
+#   - a skipped test is counted as skipped, never as passed, and a skip that no line of
+#     scripts/allowed_skips.txt accepts is a failure (it nearly always means a missing dependency);
+#   - a suite that executed no test, or a check that ran on zero files, is a failure;
+#   - compile checks count compile units, not tests: only a unit that fails adds to the total.
+# Environment: MOCAP_FUZZ_SECONDS (default 60), MOCAP_SKIP_SANITIZERS=1 for a quick local run
+# (the sanitizer and fuzz suites are then listed as skipped), MOCAP_TEST_BUILD_DIR (default build/)
+# for the suites' build folders and logs.
+#
+# A new suite is one block: run it with its output in a log, then one of
+#   record_from "name" ctest|pytest|dotnet|counts|units LOG_OR_RESULTS_FILE
+# (see scripts/test_results.py for what each kind reads).
 set -uo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 NATIVE="$ROOT/Packages/com.mocap.imu/Native~"
-BUILD="$ROOT/build"
+BUILD="${MOCAP_TEST_BUILD_DIR:-$ROOT/build}"
 JOBS="$(nproc 2>/dev/null || echo 2)"
 FUZZ_SECONDS="${MOCAP_FUZZ_SECONDS:-60}"
+PY=/usr/bin/python3
+ALLOWED_SKIPS="$ROOT/scripts/allowed_skips.txt"
 
-"$ROOT/scripts/setup.sh" || { echo "setup failed"; echo "0 passed, 1 failed"; exit 1; }
+"$ROOT/scripts/setup.sh" || { echo "setup failed"; echo "0 passed, 1 failed, 0 skipped"; exit 1; }
 
 total_passed=0
 total_failed=0
+total_skipped=0
 summary=()
 
-record() { # name passed failed
+record() { # name passed failed skipped
   total_passed=$((total_passed + $2))
   total_failed=$((total_failed + $3))
-  summary+=("$(printf '%-28s %5d passed, %d failed' "$1" "$2" "$3")")
+  total_skipped=$((total_skipped + $4))
+  summary+=("$(printf '%-28s %5d passed, %d failed, %d skipped' "$1" "$2" "$3" "$4")")
 }
 
-# Runs ctest in a build dir and records its counts; a build failure counts as one failure.
+# A compile check: a unit that compiles is no test passed; one that does not is a failure.
+record_units() { # name ok failed
+  total_failed=$((total_failed + $3))
+  summary+=("$(printf '%-28s %5d compile units ok, %d failed' "$1" "$2" "$3")")
+}
+
+# A whole suite that was not run on purpose (not for a missing dependency): one skip.
+record_suite_skipped() { # name why
+  total_skipped=$((total_skipped + 1))
+  summary+=("$(printf '%-28s   suite skipped: %s' "$1" "$2")")
+}
+
+# Records a suite from its runner's results. kind: ctest (console log), pytest (JUnit XML from
+# --junitxml), dotnet (TRX from --logger trx), counts (a "N passed, N failed[, N skipped]" line),
+# units (a "N compile units ok, N failed" line). Unreadable results or no test run: one failure.
+record_from() { # name kind file
+  local counts
+  counts="$("$PY" "$ROOT/scripts/test_results.py" --suite "$1" --allow "$ALLOWED_SKIPS" "$2" "$3")"
+  if [ "$2" = units ]; then
+    [[ "$counts" =~ ^[0-9]+\ [0-9]+$ ]] || counts="0 1"
+    # shellcheck disable=SC2086
+    record_units "$1" $counts
+  else
+    [[ "$counts" =~ ^[0-9]+\ [0-9]+\ [0-9]+$ ]] || counts="0 1 0"
+    # shellcheck disable=SC2086
+    record "$1" $counts
+  fi
+}
+
+# Configures, builds and runs ctest in a build dir; a configure or build failure is one failure.
 run_ctest_suite() { # name build_dir cmake_args... -- ctest_args...
   local name="$1" dir="$2"; shift 2
   local cmake_args=() ctest_args=()
@@ -40,29 +84,34 @@ run_ctest_suite() { # name build_dir cmake_args... -- ctest_args...
   ctest_args=("$@")
   echo "=== $name: configure + build ($dir)"
   if ! cmake -S "$NATIVE" -B "$dir" "${cmake_args[@]}" >"$dir.configure.log" 2>&1; then
-    cat "$dir.configure.log"; record "$name (configure)" 0 1; return
+    cat "$dir.configure.log"; record "$name (configure)" 0 1 0; return
   fi
   if ! cmake --build "$dir" -j"$JOBS" >"$dir.build.log" 2>&1; then
-    tail -50 "$dir.build.log"; record "$name (build)" 0 1; return
+    tail -50 "$dir.build.log"; record "$name (build)" 0 1 0; return
   fi
   echo "=== $name: ctest"
   local log="$dir.ctest.log"
+  rm -f "$log"
   (cd "$dir" && ctest --output-on-failure -j"$JOBS" "${ctest_args[@]}") 2>&1 | tee "$log"
-  local line failed total
-  line="$(grep -E 'tests passed, [0-9]+ tests? failed out of [0-9]+' "$log" | tail -1)"
-  if [ -z "$line" ]; then
-    if grep -q "No tests were found" "$log"; then record "$name" 0 1; else record "$name" 0 1; fi
-    return
-  fi
-  failed="$(sed -E 's/.* ([0-9]+) tests? failed out of ([0-9]+).*/\1/' <<<"$line")"
-  total="$(sed -E 's/.* ([0-9]+) tests? failed out of ([0-9]+).*/\2/' <<<"$line")"
-  record "$name" $((total - failed)) "$failed"
+  record_from "$name" ctest "$log"
+}
+
+# pytest over some folders, results as JUnit XML (test names of the skips included).
+run_pytest_suite() { # name results_stem paths...
+  local name="$1" stem="$2"; shift 2
+  rm -f "$stem.xml"
+  (cd "$ROOT" && "$PY" -m pytest -q -rsx --junitxml="$stem.xml" "$@") 2>&1 | tee "$stem.log"
+  record_from "$name" pytest "$stem.xml"
 }
 
 mkdir -p "$BUILD"
 run_ctest_suite "engine (release)" "$BUILD/engine" -DCMAKE_BUILD_TYPE=RelWithDebInfo
 
-if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
+if [ "${MOCAP_SKIP_SANITIZERS:-0}" = "1" ]; then
+  for suite in "engine (asan+ubsan)" "engine threads (tsan)" "fuzz"; do
+    record_suite_skipped "$suite" "MOCAP_SKIP_SANITIZERS=1"
+  done
+else
   run_ctest_suite "engine (asan+ubsan)" "$BUILD/engine-asan" -DCMAKE_BUILD_TYPE=Debug \
     -DMOCAP_SANITIZE=address,undefined
   run_ctest_suite "engine threads (tsan)" "$BUILD/engine-tsan" -DCMAKE_BUILD_TYPE=Debug \
@@ -87,7 +136,7 @@ if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
             -print_final_stats=1 -artifact_prefix="$artifacts/" \
             "$corpus" "$NATIVE/fuzz/corpus/$target") >"$log" 2>&1; then
         echo "  $target: $(grep -oE "number_of_executed_units: [0-9]+" "$log" || true)"
-        record "fuzz ($target)" 1 0
+        record "fuzz ($target)" 1 0 0
       else
         tail -40 "$log"
         # A CI machine's files are gone after the run: print the failing input so it can be
@@ -97,11 +146,11 @@ if [ "${MOCAP_SKIP_SANITIZERS:-0}" != "1" ]; then
           echo "--- failing input $(basename "$input") ($(wc -c <"$input") bytes), base64:"
           head -c 8192 "$input" | base64
         done
-        record "fuzz ($target)" 0 1
+        record "fuzz ($target)" 0 1 0
       fi
     done
   else
-    tail -40 "$fuzz_dir.log"; record "fuzz (build)" 0 1
+    tail -40 "$fuzz_dir.log"; record "fuzz (build)" 0 1 0
   fi
 fi
 
@@ -110,81 +159,61 @@ fi
 # link, no run: there is no Windows here).
 if command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1; then
   echo "=== engine: Windows cross-compile check (MinGW-w64, -Werror)"
-  win_pass=0; win_fail=0
-  for src in $(grep -oE 'src/[a-z_0-9]+\.c' "$NATIVE/CMakeLists.txt" | sort -u | grep -v posix); do
-    if out="$(x86_64-w64-mingw32-gcc -std=c11 -Wall -Wextra -Wno-unused-parameter -Werror -fsyntax-only \
-        -D__USE_MINGW_ANSI_STDIO=1 -DMOCAP_BUILDING_LIBRARY -DMOCAP_HAVE_ONNXRUNTIME=1 \
-        -I"$NATIVE/include" -I"$NATIVE/src" -I"$ROOT/build/third_party/onnxruntime/include" \
-        "$NATIVE/$src" 2>&1)" && [ -z "$out" ]; then
-      win_pass=$((win_pass + 1))
-    else
-      win_fail=$((win_fail + 1)); echo "$src:"; echo "$out" | head -20
-    fi
-  done
-  echo "$win_pass sources compile for Windows, $win_fail do not"
-  record "engine (Windows compile)" "$win_pass" "$win_fail"
+  log="$BUILD/windows-compile.log"
+  {
+    win_ok=0; win_fail=0
+    for src in $(grep -oE 'src/[a-z_0-9]+\.c' "$NATIVE/CMakeLists.txt" | sort -u | grep -v posix); do
+      if out="$(x86_64-w64-mingw32-gcc -std=c11 -Wall -Wextra -Wno-unused-parameter -Werror -fsyntax-only \
+          -D__USE_MINGW_ANSI_STDIO=1 -DMOCAP_BUILDING_LIBRARY -DMOCAP_HAVE_ONNXRUNTIME=1 \
+          -I"$NATIVE/include" -I"$NATIVE/src" -I"$ROOT/build/third_party/onnxruntime/include" \
+          "$NATIVE/$src" 2>&1)" && [ -z "$out" ]; then
+        win_ok=$((win_ok + 1))
+      else
+        win_fail=$((win_fail + 1)); echo "$src:"; echo "$out" | head -20
+      fi
+    done
+    echo "$win_ok compile units ok, $win_fail failed"
+  } 2>&1 | tee "$log"
+  record_from "engine (Windows compile)" units "$log"
 else
-  echo "x86_64-w64-mingw32-gcc not found"; record "engine (Windows compile)" 0 1
+  echo "x86_64-w64-mingw32-gcc not found"; record_units "engine (Windows compile)" 0 1
 fi
 
 if [ -d "$ROOT/dotnet/Mocap.Imu.Core.Tests" ]; then
   echo "=== dotnet: C# core (NUnit) against the real engine"
-  log="$BUILD/dotnet.log"
   if ! command -v dotnet >/dev/null 2>&1; then
-    echo "dotnet SDK not found"; record "dotnet (C# core)" 0 1
+    echo "dotnet SDK not found"; record "dotnet (C# core)" 0 1 0
   else
+    results="$BUILD/dotnet-results"
+    rm -f "$results/core.trx"
     (cd "$ROOT" && MOCAP_MOCAPCTL="$BUILD/engine/mocapctl" \
-      dotnet test dotnet/Mocap.Imu.Core.Tests -p:MocapNativeDir="$BUILD/engine" --nologo) 2>&1 | tee "$log"
-    line="$(grep -E '(Passed|Failed)! +- +Failed: +[0-9]+, +Passed: +[0-9]+' "$log" | tail -1)"
-    if [ -z "$line" ]; then
-      record "dotnet (C# core)" 0 1
-    else
-      f="$(sed -E 's/.*Failed: +([0-9]+),.*/\1/' <<<"$line")"
-      p="$(sed -E 's/.*Passed: +([0-9]+),.*/\1/' <<<"$line")"
-      record "dotnet (C# core)" "$p" "$f"
-    fi
+      dotnet test dotnet/Mocap.Imu.Core.Tests -p:MocapNativeDir="$BUILD/engine" --nologo \
+        --results-directory "$results" --logger "trx;LogFileName=core.trx") 2>&1 | tee "$BUILD/dotnet.log"
+    record_from "dotnet (C# core)" dotnet "$results/core.trx"
   fi
 fi
 
 if [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ] && ! command -v dotnet >/dev/null 2>&1; then
   echo "=== C# syntax of the whole Unity package: dotnet SDK not found"
-  record "C# syntax (Unity package)" 0 1
+  record "C# syntax (Unity package)" 0 1 0
 elif [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ]; then
   # The Unity glue cannot be compiled here (no UnityEngine assemblies): parse all of it instead.
   echo "=== C# syntax of the whole Unity package (C# 9, editor and player symbols)"
   log="$BUILD/syntax.log"
   (cd "$ROOT" && dotnet run --project dotnet/Mocap.Imu.SyntaxCheck -- Packages/com.mocap.imu) 2>&1 | tee "$log"
-  line="$(grep -E '^[0-9]+ passed, [0-9]+ failed$' "$log" | tail -1)"
-  if [ -z "$line" ]; then
-    record "C# syntax (Unity package)" 0 1
-  else
-    record "C# syntax (Unity package)" "$(cut -d' ' -f1 <<<"$line")" "$(cut -d' ' -f3 <<<"$line")"
-  fi
+  record_from "C# syntax (Unity package)" counts "$log"
 fi
 
-if [ -d "$ROOT/training/tests" ]; then
-  echo "=== python: pytest training/"
-  log="$BUILD/pytest.log"
-  (cd "$ROOT" && /usr/bin/python3 -m pytest -q training/tests) 2>&1 | tee "$log"
-  p="$(grep -Eo '[0-9]+ passed' "$log" | tail -1 | grep -Eo '[0-9]+' || echo 0)"
-  f="$(grep -Eo '[0-9]+ (failed|error)' "$log" | awk '{s+=$1} END {print s+0}')"
-  if [ "$p" = "0" ] && [ "$f" = "0" ]; then f=1; fi
-  record "python (training)" "$p" "$f"
-fi
+echo "=== python: pytest training/"
+run_pytest_suite "python (training)" "$BUILD/pytest-training" training/tests
 
-if [ -d "$ROOT/scripts/tests" ]; then
-  echo "=== unity package: .meta files, package linter (pytest scripts/tests)"
-  /usr/bin/python3 "$ROOT/scripts/package_lint.py" || true # the problems, file by file
-  log="$BUILD/pytest-scripts.log"
-  (cd "$ROOT" && /usr/bin/python3 -m pytest -q scripts/tests) 2>&1 | tee "$log"
-  p="$(grep -Eo '[0-9]+ passed' "$log" | tail -1 | grep -Eo '[0-9]+' || echo 0)"
-  f="$(grep -Eo '[0-9]+ (failed|error)' "$log" | awk '{s+=$1} END {print s+0}')"
-  if [ "$p" = "0" ] && [ "$f" = "0" ]; then f=1; fi
-  record "unity package (lint)" "$p" "$f"
-fi
+echo "=== unity package: .meta files, package linter (pytest scripts/tests)"
+"$PY" "$ROOT/scripts/package_lint.py" || true # the problems, file by file
+MOCAP_MOCAPCTL="$BUILD/engine/mocapctl" \
+  run_pytest_suite "unity package (lint)" "$BUILD/pytest-scripts" scripts/tests
 
 echo
 echo "=== summary"
 for line in "${summary[@]}"; do echo "$line"; done
-echo "$total_passed passed, $total_failed failed"
+echo "$total_passed passed, $total_failed failed, $total_skipped skipped"
 [ "$total_failed" -eq 0 ]
