@@ -88,7 +88,7 @@ namespace Mocap.Imu.Editor
         void OnGUI()
         {
             _scroll = EditorGUILayout.BeginScrollView(_scroll);
-            if (!component) component = FindObjectOfType<MocapSessionComponent>();
+            if (!component) component = FindAnyObjectByType<MocapSessionComponent>();
             component = (MocapSessionComponent)EditorGUILayout.ObjectField("Session", component, typeof(MocapSessionComponent), true);
             int characters = component ? Math.Max(1, component.CharacterCount) : 1;
             character = Mathf.Clamp(EditorGUILayout.IntSlider("Character", character, 0, characters - 1), 0, characters - 1);

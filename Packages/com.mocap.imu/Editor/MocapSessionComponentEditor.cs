@@ -86,7 +86,7 @@ namespace Mocap.Imu.Editor
         /// <summary>The avatar a HumanoidPoseDriver drives from this character, else the component's own object.</summary>
         public static GameObject Avatar(Component component, int character)
         {
-            foreach (var driver in UnityEngine.Object.FindObjectsOfType<HumanoidPoseDriver>())
+            foreach (var driver in UnityEngine.Object.FindObjectsByType<HumanoidPoseDriver>(FindObjectsSortMode.None))
                 if (driver.session == component && driver.character == character) return driver.gameObject;
             return component.gameObject;
         }
@@ -241,7 +241,7 @@ namespace Mocap.Imu.Editor
             }
             MocapSessionComponent component = null;
             if (Selection.activeGameObject) component = Selection.activeGameObject.GetComponentInParent<MocapSessionComponent>();
-            if (!component) component = UnityEngine.Object.FindObjectOfType<MocapSessionComponent>();
+            if (!component) component = UnityEngine.Object.FindAnyObjectByType<MocapSessionComponent>();
             if (!component)
             {
                 Debug.LogWarning("Mocap: no MocapSessionComponent in the scene to record.");

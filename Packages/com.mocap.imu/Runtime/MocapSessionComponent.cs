@@ -217,10 +217,10 @@ namespace Mocap.Imu
                     Directory.CreateDirectory(folder);
                     // Never an existing name: the capture writer truncates the file it opens.
                     var now = DateTime.Now;
-                    var previous = _recordingPaths;
+                    var previousPaths = _recordingPaths;
                     for (int c = 0; c < n; c++)
                         request.CapturePaths[c] = TakeNaming.CapturePath(folder, now, c, request.Sources[c].name,
-                            p => File.Exists(p) || Array.IndexOf(previous, p) >= 0 || Array.IndexOf(request.CapturePaths, p) >= 0);
+                            p => File.Exists(p) || Array.IndexOf(previousPaths, p) >= 0 || Array.IndexOf(request.CapturePaths, p) >= 0);
                 }
                 _recordingPaths = request.CapturePaths;
                 request.Configs = new SessionConfig[n];

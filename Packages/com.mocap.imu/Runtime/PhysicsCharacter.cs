@@ -231,8 +231,13 @@ namespace Mocap.Imu
 
             // Root: bounded PD force toward the kinematic hips (drift and height) and torque toward its rotation (upright).
             float mass = totalMass;
+#if UNITY_6000_0_OR_NEWER
+            Vector3 rootVelocity = root.linearVelocity; // Unity 6 renamed velocity
+#else
+            Vector3 rootVelocity = root.velocity;
+#endif
             Vector3 force = (rootPositionGain * (_driver.TargetHipsWorldPosition - root.transform.position)
-                             - rootPositionDamping * root.velocity) * mass;
+                             - rootPositionDamping * rootVelocity) * mass;
             force = Vector3.ClampMagnitude(force, maxRootForceBodyWeights * mass * Physics.gravity.magnitude);
             root.AddForce(force);
 

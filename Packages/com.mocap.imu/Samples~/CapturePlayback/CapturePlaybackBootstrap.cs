@@ -33,7 +33,8 @@ public sealed class CapturePlaybackBootstrap : MonoBehaviour
         // Without a calibration file, the capture's own heading and T-pose windows calibrate it.
         source.playbackCalibrationWindows = string.IsNullOrEmpty(calibrationFile);
 
-        SampleScene.BuildFloorAndLight();
+        var stage = gameObject.AddComponent<MocapStage>();
+        stage.Build();
         var sessionObject = new GameObject("Mocap Session");
         sessionObject.SetActive(false);
         var session = sessionObject.AddComponent<MocapSessionComponent>();
@@ -45,6 +46,6 @@ public sealed class CapturePlaybackBootstrap : MonoBehaviour
         var driver = avatar.gameObject.AddComponent<HumanoidPoseDriver>();
         driver.session = session;
         if (physicsCharacter) avatar.gameObject.AddComponent<PhysicsCharacter>();
-        SampleScene.PlaceCamera(avatar.transform);
+        stage.Frame(avatar.transform);
     }
 }

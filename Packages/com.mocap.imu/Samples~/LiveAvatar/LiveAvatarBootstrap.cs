@@ -27,7 +27,8 @@ public sealed class LiveAvatarBootstrap : MonoBehaviour
             settings.characters[0].source = MocapSourceKind.Serial;
             settings.characters[0].port = serialPort;
         }
-        SampleScene.BuildFloorAndLight();
+        var stage = gameObject.AddComponent<MocapStage>();
+        stage.Build();
         var sessionObject = new GameObject("Mocap Session");
         sessionObject.SetActive(false);
         var session = sessionObject.AddComponent<MocapSessionComponent>();
@@ -42,35 +43,6 @@ public sealed class LiveAvatarBootstrap : MonoBehaviour
 
         var overlay = sessionObject.AddComponent<CalibrationOverlay>();
         overlay.session = session;
-        SampleScene.PlaceCamera(avatar.transform);
-    }
-}
-
-/// <summary>Shared scene helpers of the samples.</summary>
-public static class SampleScene
-{
-    public static void BuildFloorAndLight()
-    {
-        var floor = GameObject.CreatePrimitive(PrimitiveType.Plane); // has a MeshCollider: the physics character stands on it
-        floor.name = "Floor";
-        floor.transform.localScale = new Vector3(4f, 1f, 4f);
-        if (Object.FindObjectOfType<Light>() == null)
-        {
-            var light = new GameObject("Light").AddComponent<Light>();
-            light.type = LightType.Directional;
-            light.transform.rotation = Quaternion.Euler(50f, -30f, 0f);
-        }
-    }
-
-    public static void PlaceCamera(Transform target)
-    {
-        var camera = Camera.main;
-        if (camera == null)
-        {
-            camera = new GameObject("Main Camera").AddComponent<Camera>();
-            camera.tag = "MainCamera";
-        }
-        camera.transform.position = target.position + new Vector3(0f, 1.2f, 3.5f);
-        camera.transform.LookAt(target.position + Vector3.up * 0.9f);
+        stage.Frame(avatar.transform);
     }
 }

@@ -34,7 +34,8 @@ public sealed class MultiCharacterBootstrap : MonoBehaviour
                 });
             }
         }
-        SampleScene.BuildFloorAndLight();
+        var stage = gameObject.AddComponent<MocapStage>();
+        stage.Build();
         var sessionObject = new GameObject("Mocap Session");
         sessionObject.SetActive(false);
         var session = sessionObject.AddComponent<MocapSessionComponent>();
@@ -59,6 +60,6 @@ public sealed class MultiCharacterBootstrap : MonoBehaviour
             if (vmc != null) vmc.destinations.Add(new VmcDestination { character = c, address = "127.0.0.1:" + (firstVmcPort + c) });
             if (first == null) first = animator.transform;
         }
-        SampleScene.PlaceCamera(first);
+        stage.Frame(first);
     }
 }
