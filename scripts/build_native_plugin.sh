@@ -5,26 +5,36 @@
 # not to git; the importer settings live in scripts/unity_meta.py, which regenerates the .meta
 # files with their path-derived GUIDs). Windows and macOS steps: Documentation~/index.md.
 #
-# Usage: scripts/build_native_plugin.sh [--with-hid] [--pack]
+# The plugin is compiled and linked inside a Debian 11 root (glibc 2.31, the glibc of Ubuntu
+# 20.04, the oldest Linux Unity 2022.3 supports; scripts/bullseye_root.sh makes it once, outside
+# the repository), so it asks nothing newer of glibc than 2.31: scripts/check_glibc.sh verifies
+# that, and the built plugin replays a capture through the pose model inside that root (glibc
+# 2.31) and here. Needs root or sudo (debootstrap, chroot).
+#
+# Usage: scripts/build_native_plugin.sh [--with-hid] [--pack] [--host-toolchain]
 #   --with-hid  link hidapi for the HID transport (the plugin then needs libhidapi-hidraw0 on the
 #               user's machine); by default the plugin depends on nothing but glibc
 #   --pack      also write out/com.mocap.imu-<version>.tgz, a tarball Unity's Package Manager
 #               installs with "Add package from tarball" (the package with its plugin)
+#   --host-toolchain  compile with this machine's compiler instead of in the glibc 2.31 root (no
+#               root needed); the glibc check then passes only on a machine with glibc <= 2.31
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 PKG="$ROOT/Packages/com.mocap.imu"
-BUILD="$ROOT/build/unity-plugin"
+BUILD="$ROOT/build/glibc231-plugin"
 DEST="$PKG/Runtime/Plugins/Linux/x86_64"
 JOBS="$(nproc 2>/dev/null || echo 2)"
 
 with_hid=OFF
 pack=0
+host_toolchain=0
 for arg in "$@"; do
   case "$arg" in
     --with-hid) with_hid=ON ;;
     --pack) pack=1 ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    --host-toolchain) host_toolchain=1 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
     *) echo "build_native_plugin: unknown option $arg" >&2; exit 2 ;;
   esac
 done
@@ -38,12 +48,38 @@ die() { echo "build_native_plugin: error: $*" >&2; exit 1; }
 # ONNX Runtime headers (the library itself is loaded at run time, never linked).
 "$ROOT/scripts/fetch_onnxruntime.sh" >/dev/null
 
-say "configure + build (Release, HID $with_hid) in $BUILD"
-cmake -S "$PKG/Native~" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DMOCAP_BUILD_TESTS=OFF \
-  -DMOCAP_WITH_HIDAPI="$with_hid" >"$BUILD.configure.log" 2>&1 \
-  || { cat "$BUILD.configure.log"; die "cmake configure failed"; }
-cmake --build "$BUILD" --target mocap_imu -j"$JOBS" >"$BUILD.build.log" 2>&1 \
-  || { tail -50 "$BUILD.build.log"; die "build failed"; }
+as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi; }
+bullseye() { as_root "$ROOT/scripts/bullseye_root.sh" "$@"; }
+# The copy of the sources inside the root mirrors the repository's layout, so CMake finds the
+# ONNX Runtime headers where it looks for them (build/third_party/onnxruntime). One folder per
+# run: two builds at once (CI and a developer) share the cached root.
+IN_ROOT="/work/mocap_imu.$$"
+
+if [ $host_toolchain -eq 1 ]; then
+  BUILD="$ROOT/build/glibc-host-plugin"
+  say "configure + build (Release, HID $with_hid, this machine's toolchain) in $BUILD"
+  cmake -S "$PKG/Native~" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DMOCAP_BUILD_TESTS=OFF \
+    -DMOCAP_WITH_HIDAPI="$with_hid" >"$BUILD.configure.log" 2>&1 \
+    || { cat "$BUILD.configure.log"; die "cmake configure failed"; }
+  cmake --build "$BUILD" --target mocap_imu -j"$JOBS" >"$BUILD.build.log" 2>&1 \
+    || { tail -50 "$BUILD.build.log"; die "build failed"; }
+else
+  rootfs="$(bullseye path)" || die "no Debian 11 root to build in (scripts/bullseye_root.sh)"
+  say "configure + build (Release, HID $with_hid) in the glibc 2.31 root $rootfs"
+  work="$rootfs$IN_ROOT"
+  trap 'as_root rm -rf "$work"' EXIT
+  as_root mkdir -p "$work/src/Packages/com.mocap.imu" "$work/src/build/third_party/onnxruntime"
+  tar -C "$PKG" --exclude='Native~/build*' -cf - 'Native~' \
+    | as_root tar -C "$work/src/Packages/com.mocap.imu" -xf -
+  as_root cp -r "$ROOT/build/third_party/onnxruntime/include" "$work/src/build/third_party/onnxruntime/"
+  mkdir -p "$BUILD"
+  bullseye run cmake -S "$IN_ROOT/src/Packages/com.mocap.imu/Native~" -B "$IN_ROOT/build" \
+    -DCMAKE_BUILD_TYPE=Release -DMOCAP_BUILD_TESTS=OFF -DMOCAP_WITH_HIDAPI="$with_hid" \
+    >"$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log"; die "cmake configure failed"; }
+  bullseye run cmake --build "$IN_ROOT/build" --target mocap_imu -j"$JOBS" >"$BUILD.build.log" 2>&1 \
+    || { tail -50 "$BUILD.build.log"; die "build failed"; }
+  cp "$work/build/libmocap_imu.so" "$BUILD/libmocap_imu.so"
+fi
 
 lib="$BUILD/libmocap_imu.so"
 [ -f "$lib" ] || die "the build produced no $lib"
@@ -69,6 +105,27 @@ mkdir -p "$DEST"
 cp "$lib" "$DEST/libmocap_imu.so"
 strip --strip-unneeded "$DEST/libmocap_imu.so"
 say "$DEST/libmocap_imu.so: $(stat -c %s "$DEST/libmocap_imu.so") bytes, $n_exports exported mocap_ functions, needs ${needed% } (newest symbol $glibc)"
+
+"$ROOT/scripts/check_glibc.sh" "$DEST/libmocap_imu.so" | sed 's/^/build_native_plugin: /' \
+  || { rm -f "$DEST/libmocap_imu.so"
+       die "the plugin needs a glibc newer than 2.31 (Ubuntu 20.04), removed; build it without --host-toolchain"; }
+
+# The plugin must load and work on glibc 2.31 itself: dlopen it inside the root and replay the
+# package's test capture through the shipped model with the registry package's ONNX Runtime.
+if [ $host_toolchain -eq 0 ]; then
+  smoke="$work/smoke"
+  as_root mkdir -p "$smoke"
+  as_root cp "$DEST/libmocap_imu.so" "$PKG/Runtime/Models/mocap_pose_fp32.onnx" \
+    "$ROOT/build/third_party/onnxruntime/lib/libonnxruntime.so" \
+    "$PKG/Tests/Runtime/Fixtures/walk.cap" "$ROOT/scripts/plugin_smoke_load.c" "$smoke/"
+  bullseye run gcc -std=gnu11 -O1 -Wall -Wextra -Werror \
+    -I"$IN_ROOT/src/Packages/com.mocap.imu/Native~/include" -o "$IN_ROOT/smoke/plugin_smoke_load" \
+    "$IN_ROOT/smoke/plugin_smoke_load.c" -ldl -lm || die "the smoke loader does not compile"
+  bullseye run "$IN_ROOT/smoke/plugin_smoke_load" "$IN_ROOT/smoke/libmocap_imu.so" \
+    "$IN_ROOT/smoke/mocap_pose_fp32.onnx" "$IN_ROOT/smoke/libonnxruntime.so" "$IN_ROOT/smoke/walk.cap" \
+    | sed 's/^/build_native_plugin: in the glibc 2.31 root: /' \
+    || die "the plugin does not load or run on glibc 2.31"
+fi
 
 # Smoke test of the stripped plugin as Unity would use it: load it, open the shipped model with
 # ONNX Runtime given by explicit path (the same libonnxruntime.so the registry package ships).
