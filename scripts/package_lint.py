@@ -8,9 +8,10 @@ Checks (each problem is printed as "<file>: <problem>"; exit status 1 when there
   layout         README.md, CHANGELOG.md (with an entry for the package version), LICENSE.md,
                  Third Party Notices.md, Runtime/, Editor/, Tests/Editor/, Tests/Runtime/
   JSON           every .json/.asmdef/.asmref outside Native~ parses
-  .meta          every file and folder outside ~ folders has one; no orphan .meta; each .meta is
-                 exactly what scripts/unity_meta.py generates (path-derived GUID, importer);
-                 GUIDs are 32 hex digits and unique across the package
+  .meta          every file and folder outside ~ folders has one; no orphan .meta; the importer
+                 section is what scripts/unity_meta.py generates; GUIDs are 32 lower-case hex
+                 digits and unique across the package (never compared with the path: a GUID
+                 survives a move or a rename, as users' scenes reference scripts by it)
   asmdefs        names unique; the issue's five assemblies exist; references (by name or
                  "GUID:") resolve to an asmdef of the package or a known Unity assembly; no
                  reference cycle; a player assembly never references an Editor-only one; the
@@ -18,7 +19,15 @@ Checks (each problem is printed as "<file>: <problem>"; exit status 1 when there
                  assemblies are Editor-only; test assemblies have defineConstraints
                  UNITY_INCLUDE_TESTS, overrideReferences + nunit.framework.dll, both TestRunner
                  references, autoReferenced false, and Editor-only platform under Tests/Editor;
-                 every .cs belongs to an asmdef
+                 every .cs belongs to an asmdef; includePlatforms/excludePlatforms hold Unity's
+                 platform names, not both; an assembly that calls the native engine (DllImport)
+                 or references one that does is limited to the Editor and the standalone
+                 platforms a native plugin is built for; no assembly compiles on a platform
+                 where one of its package references does not
+  modules        every built-in module the C# code uses (Physics, ArticulationBody, Animator,
+                 AvatarBuilder, GUI, XRSettings...; outside engine-free assemblies, samples
+                 included) is a dependency at "1.0.0", and every declared module is used; a
+                 package with test assemblies depends on com.unity.test-framework
   plugins        .so/.dll/.dylib/.bundle live under Runtime/Plugins/<OS>/..., have a
                  PluginImporter .meta with the editor and player platform of their OS enabled;
                  none is tracked by git (they are build outputs: scripts/build_native_plugin.sh)
@@ -54,6 +63,41 @@ PLUGIN_RULES = {
     ".dylib": ("Runtime/Plugins/macOS/", "OSX", "OSXUniversal"),
     ".bundle": ("Runtime/Plugins/macOS/", "OSX", "OSXUniversal"),
 }
+# Platform names of asmdef includePlatforms/excludePlatforms (UnityEditor.Compilation's
+# AssemblyDefinitionPlatform.Name values).
+UNITY_PLATFORMS = {
+    "Android", "CloudRendering", "Editor", "EmbeddedLinux", "GameCoreScarlett", "GameCoreXboxOne",
+    "iOS", "LinuxStandalone64", "Lumin", "macOSStandalone", "PS4", "PS5", "QNX", "Stadia",
+    "Switch", "tvOS", "VisionOS", "WebGL", "WindowsStandalone32", "WindowsStandalone64", "WSA",
+    "XboxOne",
+}
+# The asmdef platform of each player a native plugin is built for (see PLUGIN_RULES), plus the
+# Editor: where an assembly that calls the engine may compile.
+NATIVE_PLATFORMS = {"Editor", "LinuxStandalone64", "WindowsStandalone64", "macOSStandalone"}
+# Built-in module -> the API names (whole words, in code outside comments and strings) that live
+# in it. Names of the engine-free core (its own HumanBone, say) are not scanned.
+MODULE_APIS = {
+    "com.unity.modules.physics": r"Physics|Rigidbody|Collider|BoxCollider|SphereCollider|"
+                                 r"CapsuleCollider|MeshCollider|CharacterController|RaycastHit|"
+                                 r"ArticulationBody|ArticulationDrive|ArticulationJointType|"
+                                 r"ArticulationDofLock|ConfigurableJoint|PhysicMaterial",
+    "com.unity.modules.animation": r"Animator|Avatar|AvatarBuilder|HumanBodyBones|HumanDescription|"
+                                   r"SkeletonBone|HumanPose|HumanPoseHandler|AnimationClip|"
+                                   r"RuntimeAnimatorController",
+    "com.unity.modules.imgui": r"GUI|GUILayout|GUIStyle|GUIContent|GUISkin|GUIUtility|OnGUI",
+    "com.unity.modules.jsonserialize": r"JsonUtility",
+    "com.unity.modules.vr": r"XRSettings|XRDevice",
+    "com.unity.modules.xr": r"InputDevices|InputDevice|XRInputSubsystem|XRDisplaySubsystem",
+    "com.unity.modules.ui": r"Canvas|CanvasRenderer|CanvasGroup",
+    "com.unity.modules.textrendering": r"TextMesh|Font",
+    "com.unity.modules.audio": r"AudioSource|AudioClip|AudioListener",
+    "com.unity.modules.unitywebrequest": r"UnityWebRequest",
+}
+MODULE_VERSION = "1.0.0"
+TEST_FRAMEWORK = "com.unity.test-framework"
+# Comments and string/char literals, so that a word in them is not taken for an API use.
+CS_NOISE = re.compile(r'@"(?:[^"]|"")*"|"(?:\\.|[^"\\\n])*"|\'(?:\\.|[^\'\\\n])*\'|//[^\n]*|/\*.*?\*/',
+                      re.S)
 SEMVER = re.compile(r"^\d+\.\d+\.\d+(-[0-9A-Za-z.-]+)?(\+[0-9A-Za-z.-]+)?$")
 PACKAGE_NAME = re.compile(r"^[a-z0-9][a-z0-9-]*(\.[a-z0-9][a-z0-9-]*){2,}$")
 
@@ -106,7 +150,7 @@ class Linter:
             self.fail("package.json", f'"name" {name!r} is not a reverse-domain lower-case name')
         if isinstance(name, str) and name != unity_meta.PACKAGE_NAME:
             self.fail("package.json", f'"name" {name!r} is not {unity_meta.PACKAGE_NAME!r} '
-                      "(GUIDs are derived from it)")
+                      "(the package these tools and the samples are written for)")
         if isinstance(m.get("version"), str) and not SEMVER.match(m["version"]):
             self.fail("package.json", f'"version" {m["version"]!r} is not semver (x.y.z)')
         if isinstance(m.get("unity"), str) and not re.match(r"^\d{4}\.\d+$", m["unity"]):
@@ -159,6 +203,8 @@ class Linter:
 
     # ---------------------------------------------------------------------------------- metas
     def check_metas(self):
+        """Presence, orphans, importer settings, GUID format and uniqueness. A GUID is never
+        compared with the asset's path: it must survive a move or a rename."""
         missing, stale, orphans = unity_meta.plan(self.pkg)
         for m in missing:
             self.fail(m[:-5], f"has no .meta file (expected {m}; run scripts/unity_meta.py)")
@@ -167,29 +213,13 @@ class Linter:
         assets = dict(unity_meta.walk_assets(self.pkg))
         for m in stale:
             rel = m[:-5]
-            text = (self.pkg / m).read_text(encoding="utf-8", errors="replace")
-            got = re.search(r"^guid: *(\S*)", text, re.M)
-            want = unity_meta.guid_for(rel)
-            if not got or got.group(1) != want:
-                self.fail(m, f"GUID {got.group(1) if got else '(none)'} is not the path-derived "
-                          f"{want} (run scripts/unity_meta.py)")
-            else:
-                self.fail(m, "importer settings differ from scripts/unity_meta.py's for a "
-                          f"{'folder' if assets[rel] else Path(rel).suffix or 'file'} "
-                          "(run scripts/unity_meta.py)")
-        seen = {}
-        for m in unity_meta.walk_metas(self.pkg):
-            text = (self.pkg / m).read_text(encoding="utf-8", errors="replace")
-            got = re.search(r"^guid: *(\S*)", text, re.M)
-            if not got or not re.fullmatch(r"[0-9a-f]{32}", got.group(1)):
-                self.fail(m, "no 32-hex-digit guid line")
-                continue
-            g = got.group(1)
-            if g in seen:
-                self.fail(m, f"duplicate GUID {g} (also in {seen[g]})")
-            else:
-                seen[g] = m
-        self.guids = seen
+            self.fail(m, "importer settings differ from scripts/unity_meta.py's for a "
+                      f"{'folder' if assets[rel] else Path(rel).suffix or 'file'} "
+                      "(run scripts/unity_meta.py; it keeps the GUID)")
+        guids = unity_meta.read_guids(self.pkg)
+        for m, why in unity_meta.guid_problems(guids):
+            self.fail(m, why)
+        self.guids = {g: m for m, g in guids.items() if g}
 
     # -------------------------------------------------------------------------------- asmdefs
     def check_asmdefs(self):
@@ -268,7 +298,62 @@ class Linter:
             if n not in state:
                 visit(n, [])
         self.check_scripts_owned(sorted(Path(r).parent.as_posix() for r in asmdefs))
+        self.check_platforms(by_name, graph)
         self.asmdefs = by_name
+
+    def platforms_of(self, rel, a):
+        """The platforms an asmdef compiles on (Unity's names), checking the two lists."""
+        lists = {}
+        for key in ("includePlatforms", "excludePlatforms"):
+            value = a.get(key, [])
+            if not isinstance(value, list) or not all(isinstance(p, str) for p in value):
+                self.fail(rel, f'"{key}" must be a list of platform names')
+                value = []
+            for p in value:
+                if p not in UNITY_PLATFORMS:
+                    self.fail(rel, f'"{key}" names {p!r}, which is no Unity platform '
+                              f"(asmdef names: {', '.join(sorted(UNITY_PLATFORMS))})")
+            lists[key] = set(value) & UNITY_PLATFORMS
+        if lists["includePlatforms"] and lists["excludePlatforms"]:
+            self.fail(rel, "includePlatforms and excludePlatforms are both set (Unity allows one)")
+        if lists["includePlatforms"]:
+            return lists["includePlatforms"]
+        return UNITY_PLATFORMS - lists["excludePlatforms"]
+
+    def calls_native(self, folder):
+        """Whether an assembly's own scripts (not those of nested asmdefs) declare a DllImport."""
+        for cs in sorted((self.pkg / folder).rglob("*.cs")):
+            owner = cs.parent
+            while owner != self.pkg / folder and not any(owner.glob("*.asmdef")):
+                owner = owner.parent
+            if owner != self.pkg / folder:
+                continue
+            if re.search(r"\[\s*(System\.Runtime\.InteropServices\.)?DllImport\b",
+                         CS_NOISE.sub(" ", cs.read_text(encoding="utf-8", errors="replace"))):
+                return True
+        return False
+
+    def check_platforms(self, by_name, graph):
+        platforms = {n: self.platforms_of(rel, a) for n, (rel, a) in by_name.items()}
+        native = {n for n, (rel, _) in by_name.items() if self.calls_native(Path(rel).parent)}
+        changed = True
+        while changed:  # an assembly that references a native one needs the engine too
+            before = len(native)
+            native |= {n for n in graph if any(t in native for t in graph[n])}
+            changed = len(native) != before
+        for name in sorted(by_name):
+            rel, _ = by_name[name]
+            if name in native:
+                outside = platforms[name] - NATIVE_PLATFORMS
+                if outside:
+                    self.fail(rel, f"{name} needs the native engine but compiles for "
+                              f"{', '.join(sorted(outside))}, where no plugin is built: set "
+                              f"includePlatforms to (some of) {', '.join(sorted(NATIVE_PLATFORMS))}")
+            for target in graph.get(name, []):
+                missing = platforms[name] - platforms[target]
+                if missing:
+                    self.fail(rel, f"{name} compiles for {', '.join(sorted(missing))}, where its "
+                              f"reference {target} does not")
 
     def check_asmdef_rules(self, rel, name, a):
         folder = Path(rel).parent.as_posix()
@@ -363,6 +448,51 @@ class Linter:
             if ign.returncode == 1:
                 self.fail(rel, "native plugin is not ignored by .gitignore (it is a build output)")
 
+    # -------------------------------------------------------------------------------- modules
+    def scripts_using_unity(self):
+        """Every .cs Unity compiles or a user imports (samples), outside engine-free assemblies."""
+        engine_free = [Path(rel).parent for rel, a in getattr(self, "asmdefs", {}).values()
+                       if a.get("noEngineReferences") is True]
+        for cs in sorted(self.pkg.rglob("*.cs")):
+            rel = cs.relative_to(self.pkg)
+            parts = rel.parts
+            if parts[0] == "Native~" or any(p.startswith(".") for p in parts):
+                continue
+            if any(rel.parent == d or d in rel.parents for d in engine_free):
+                continue
+            yield rel.as_posix(), CS_NOISE.sub(" ", cs.read_text(encoding="utf-8", errors="replace"))
+
+    def check_modules(self):
+        manifest = getattr(self, "manifest", None)
+        if not isinstance(manifest, dict) or not isinstance(manifest.get("dependencies", {}), dict):
+            return  # already reported
+        deps = manifest.get("dependencies", {})
+        users = {}
+        patterns = {m: re.compile(r"\b(" + names + r")\b") for m, names in MODULE_APIS.items()}
+        for rel, code in self.scripts_using_unity():
+            for module, pattern in patterns.items():
+                found = pattern.search(code)
+                if found and module not in users:
+                    users[module] = (rel, found.group(1))
+        for module, (rel, api) in sorted(users.items()):
+            if module not in deps:
+                self.fail("package.json", f"{rel} uses {api} (built-in module {module}), which "
+                          f'"dependencies" does not declare ("{module}": "{MODULE_VERSION}")')
+        for dep, version in sorted(deps.items()):
+            if not dep.startswith("com.unity.modules."):
+                continue
+            if version != MODULE_VERSION:
+                self.fail("package.json", f'built-in module {dep} must be "{MODULE_VERSION}", '
+                          f"not {version!r}")
+            if dep in MODULE_APIS and dep not in users:
+                self.fail("package.json", f"declares {dep}, which no script of the package uses")
+        test_assemblies = sorted(rel for rel, a in getattr(self, "asmdefs", {}).values()
+                                 if {"UnityEngine.TestRunner", "UnityEditor.TestRunner"}
+                                 & set(a.get("references") or []))
+        if test_assemblies and TEST_FRAMEWORK not in deps:
+            self.fail("package.json", f"{test_assemblies[0]} is a test assembly (users run it via "
+                      f'"testables"), so "dependencies" needs {TEST_FRAMEWORK}')
+
     def run(self):
         self.check_manifest()
         self.check_layout()
@@ -370,6 +500,7 @@ class Linter:
         self.check_metas()
         self.check_asmdefs()
         self.check_plugins()
+        self.check_modules()
         return self.problems
 
 

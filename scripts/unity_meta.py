@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Generates the Unity .meta files of the com.mocap.imu package, deterministically.
+"""Writes the Unity .meta files of the com.mocap.imu package; never changes an existing GUID.
 
 Every file and folder of the package gets a .meta (Unity ignores an asset without one, and an
 installed package is read-only, so they must be committed), except:
@@ -9,26 +9,37 @@ installed package is read-only, so they must be committed), except:
   - hidden files and folders (".gitkeep", ".DS_Store": Unity ignores them),
   - .meta files themselves.
 
-GUID = first 32 hex digits of sha256("com.mocap.imu/" + path relative to the package root, with
-"/" separators). The same path always gets the same GUID, on every machine, so regenerating never
-changes a committed GUID, and moving a file changes its GUID (as a fresh import would).
+GUIDs: users' scenes and prefabs reference the package's scripts by GUID, so a GUID must survive
+a move or a rename (done with its .meta, as Unity does). The GUID in a committed .meta is
+therefore kept as it is, whatever the path; only an asset without a .meta gets a new GUID: the
+first 32 hex digits of sha256("com.mocap.imu/" + its path), so that the build outputs' .meta
+files (Runtime/Plugins, not committed) come out the same on every machine; when another .meta
+already holds that GUID (an asset moved away from this path took it along), a random one
+(uuid4, as Unity makes them) that no .meta of the package uses.
 
 The importer follows the extension (see importer_for): MonoImporter (.cs),
 AssemblyDefinitionImporter (.asmdef), PackageManifestImporter (the root package.json),
 TextScriptImporter (.md .txt .json .xml .csv .bytes), PluginImporter with per-platform settings
 (.so: Linux x86_64 editor + player; .dll: Windows x86_64; .dylib/.bundle: macOS), DefaultImporter
 for folders and everything else, .onnx included (the native engine reads the model from its path;
-Unity must not import it as a Sentis model).
+Unity must not import it as a Sentis model). An existing .meta whose importer section differs is
+rewritten with the generated importer and its own GUID.
 
 Usage:
-  scripts/unity_meta.py [--package DIR]           write missing/stale .meta files, delete orphans
+  scripts/unity_meta.py [--package DIR]           write missing .meta files, refresh importers,
+                                                  delete orphans
   scripts/unity_meta.py [--package DIR] --check   change nothing; list every problem, exit 1 if any
+A .meta without a well-formed GUID (32 lower-case hex digits) or with a GUID another .meta of the
+package uses is reported in both modes and left alone: which asset keeps the GUID is a person's
+call (the one scenes reference).
 """
 
 import argparse
 import hashlib
 import os
+import re
 import sys
+import uuid
 from pathlib import Path
 
 PACKAGE_NAME = "com.mocap.imu"
@@ -41,9 +52,25 @@ PLUGIN_EXTENSIONS = {".so", ".dll", ".dylib", ".bundle"}
 _TAIL = "  userData: \n  assetBundleName: \n  assetBundleVariant: \n"
 
 
-def guid_for(relpath: str) -> str:
-    """The GUID of an asset at relpath (relative to the package root, "/" separators)."""
-    return hashlib.sha256(f"{PACKAGE_NAME}/{relpath}".encode("utf-8")).hexdigest()[:32]
+GUID_LINE = re.compile(r"^guid: *(\S*) *$", re.M)
+WELL_FORMED_GUID = re.compile(r"[0-9a-f]{32}")
+
+
+def new_guid(relpath: str, taken) -> str:
+    """The GUID for a new asset at relpath: path-derived when free, else random; never in taken."""
+    derived = hashlib.sha256(f"{PACKAGE_NAME}/{relpath}".encode("utf-8")).hexdigest()[:32]
+    if derived not in taken:
+        return derived
+    while True:
+        guid = uuid.uuid4().hex
+        if guid not in taken:
+            return guid
+
+
+def guid_in(meta_text_: str):
+    """The GUID written in a .meta's text, or None when it has no guid line."""
+    found = GUID_LINE.search(meta_text_)
+    return found.group(1) if found else None
 
 
 def is_excluded_name(name: str) -> bool:
@@ -124,8 +151,8 @@ def importer_for(relpath: str, is_dir: bool) -> str:
     return "DefaultImporter:\n  externalObjects: {}\n" + _TAIL
 
 
-def meta_text(relpath: str, is_dir: bool) -> str:
-    return f"fileFormatVersion: 2\nguid: {guid_for(relpath)}\n" + importer_for(relpath, is_dir)
+def meta_text(relpath: str, is_dir: bool, guid: str) -> str:
+    return f"fileFormatVersion: 2\nguid: {guid}\n" + importer_for(relpath, is_dir)
 
 
 def walk_assets(package: Path):
@@ -159,8 +186,29 @@ def walk_metas(package: Path):
                 yield prefix + f
 
 
+def read_guids(package: Path):
+    """{meta relpath: GUID as written (None without a guid line)} for every .meta Unity sees."""
+    return {m: guid_in((package / m).read_text(encoding="utf-8", errors="replace"))
+            for m in walk_metas(package)}
+
+
+def guid_problems(guids):
+    """[(meta relpath, problem)] for malformed and duplicated GUIDs, in path order."""
+    problems, first_owner = [], {}
+    for m in sorted(guids):
+        guid = guids[m]
+        if guid is None or not WELL_FORMED_GUID.fullmatch(guid):
+            problems.append((m, f"GUID {guid or '(none)'} is not 32 lower-case hex digits"))
+        elif guid in first_owner:
+            problems.append((m, f"duplicate GUID {guid} (also in {first_owner[guid]})"))
+        else:
+            first_owner[guid] = m
+    return problems
+
+
 def plan(package: Path):
-    """Returns (missing, stale, orphans): lists of relpaths of .meta files."""
+    """Returns (missing, stale, orphans): lists of relpaths of .meta files. Stale: the importer
+    section differs from the generated one (compared with the .meta's own GUID)."""
     missing, stale = [], []
     wanted = set()
     for rel, is_dir in walk_assets(package):
@@ -169,7 +217,9 @@ def plan(package: Path):
         meta_path = package / meta_rel
         if not meta_path.exists():
             missing.append(meta_rel)
-        elif meta_path.read_text(encoding="utf-8", errors="replace") != meta_text(rel, is_dir):
+            continue
+        text = meta_path.read_text(encoding="utf-8", errors="replace")
+        if text != meta_text(rel, is_dir, guid_in(text) or ""):
             stale.append(meta_rel)
     orphans = [m for m in walk_metas(package) if m not in wanted]
     return missing, stale, orphans
@@ -189,30 +239,48 @@ def main(argv=None) -> int:
         return 2
 
     missing, stale, orphans = plan(package)
+    guids = read_guids(package)
+    bad_guids = [(m, why) for m, why in guid_problems(guids) if m not in orphans]
     if args.check:
         for m in missing:
             print(f"{package / m[:-5]}: missing .meta file ({m})")
         for m in stale:
-            print(f"{package / m}: .meta differs from the generated one "
-                  f"(GUID or importer settings); run scripts/unity_meta.py")
+            print(f"{package / m}: importer settings differ from the generated ones; "
+                  "run scripts/unity_meta.py")
         for m in orphans:
             print(f"{package / m}: orphan .meta (its asset {m[:-5]} does not exist)")
-        return 1 if (missing or stale or orphans) else 0
+        for m, why in bad_guids:
+            print(f"{package / m}: {why}")
+        return 1 if (missing or stale or orphans or bad_guids) else 0
 
     assets = dict(walk_assets(package))
-    for m in missing + stale:
-        rel = m[:-5]
-        (package / m).write_text(meta_text(rel, assets[rel]), encoding="utf-8", newline="\n")
-        if not args.quiet:
-            print(f"{'wrote' if m in missing else 'refreshed'} {m}")
     for m in orphans:
         (package / m).unlink()
         if not args.quiet:
             print(f"removed orphan {m}")
+    taken = {g for m, g in guids.items() if g and m not in orphans}
+    for m in missing:
+        guid = new_guid(m[:-5], taken)
+        taken.add(guid)
+        (package / m).write_text(meta_text(m[:-5], assets[m[:-5]], guid), encoding="utf-8",
+                                 newline="\n")
+        if not args.quiet:
+            print(f"wrote {m}")
+    for m in stale:
+        kept = guids.get(m) or new_guid(m[:-5], taken)
+        taken.add(kept)
+        (package / m).write_text(meta_text(m[:-5], assets[m[:-5]], kept), encoding="utf-8",
+                                 newline="\n")
+        if not args.quiet:
+            print(f"refreshed the importer of {m} "
+                  f"({'GUID kept' if guids.get(m) else 'it had no GUID: a new one'})")
+    bad_guids = [(m, why) for m, why in bad_guids if guids.get(m) is not None or m not in stale]
+    for m, why in bad_guids:
+        print(f"unity_meta: {package / m}: {why}; left as it is (fix it by hand)", file=sys.stderr)
     if not args.quiet:
         print(f"unity_meta: {len(missing)} written, {len(stale)} refreshed, "
               f"{len(orphans)} orphans removed, {len(assets)} assets in {package}")
-    return 0
+    return 1 if bad_guids else 0
 
 
 if __name__ == "__main__":

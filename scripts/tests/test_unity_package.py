@@ -1,9 +1,11 @@
-"""Tests of scripts/unity_meta.py (deterministic .meta generation) and scripts/package_lint.py.
+"""Tests of scripts/unity_meta.py (.meta generation that never changes a GUID) and
+scripts/package_lint.py.
 
 The linter must pass on the real package and fail, naming the file, on damaged copies."""
 
 import hashlib
 import json
+import re
 import os
 import shutil
 import subprocess
@@ -63,6 +65,18 @@ def meta_files(root):
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*.meta"))}
 
 
+def guid_of(root, rel):
+    """The GUID written in the .meta of asset rel."""
+    return unity_meta.guid_in((root / (rel + ".meta")).read_text())
+
+
+def edit_json(path, **changes):
+    data = json.loads(path.read_text()) if path.exists() else {}
+    data.update(changes)
+    path.write_text(json.dumps(data, indent=4))
+    return data
+
+
 def add_plugin(pkg, rel, content=b"\x7fELF fake"):
     path = pkg / rel
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -72,11 +86,26 @@ def add_plugin(pkg, rel, content=b"\x7fELF fake"):
 
 # ------------------------------------------------------------------------------ the generator
 
-def test_guid_is_sha256_of_package_and_path():
-    want = hashlib.sha256(b"com.mocap.imu/Runtime/Core/MocapEngine.cs").hexdigest()[:32]
-    assert unity_meta.guid_for("Runtime/Core/MocapEngine.cs") == want
-    assert unity_meta.guid_for("Runtime") != unity_meta.guid_for("Runtime/")
-    assert len(set(unity_meta.guid_for(f"a/{i}") for i in range(1000))) == 1000
+def test_a_new_guid_is_path_derived_unless_taken():
+    derived = hashlib.sha256(b"com.mocap.imu/Runtime/Plugins/Linux/x86_64/libmocap_imu.so")
+    rel = "Runtime/Plugins/Linux/x86_64/libmocap_imu.so"
+    assert unity_meta.new_guid(rel, set()) == derived.hexdigest()[:32]
+    assert unity_meta.new_guid("Runtime", set()) != unity_meta.new_guid("Runtime/", set())
+    # Taken (a moved asset kept it): random, well-formed, and different every time.
+    taken = {derived.hexdigest()[:32]}
+    randoms = {unity_meta.new_guid(rel, taken) for _ in range(1000)}
+    assert len(randoms) == 1000 and not randoms & taken
+    assert all(re.fullmatch(r"[0-9a-f]{32}", g) for g in randoms)
+
+
+def test_plugin_metas_are_the_same_on_every_machine(tmp_path, pkg):
+    other = tmp_path / "elsewhere" / "com.mocap.imu"
+    shutil.copytree(pkg, other, copy_function=_copy_fn)
+    for root in (pkg, other):
+        add_plugin(root, "Runtime/Plugins/Linux/x86_64/libmocap_imu.so")
+        assert unity_meta.main(["--package", str(root), "-q"]) == 0
+    first, second = meta_files(pkg), meta_files(other)
+    assert [m for m in first if m.startswith("Runtime/Plugins")] and first == second
 
 
 def test_committed_metas_match_the_generator():
@@ -85,20 +114,61 @@ def test_committed_metas_match_the_generator():
         "run `python3 scripts/unity_meta.py` (missing/stale/orphan .meta files)"
 
 
-def test_generator_is_deterministic_across_locations(tmp_path, pkg):
-    other = tmp_path / "elsewhere" / "com.mocap.imu"
-    shutil.copytree(pkg, other, copy_function=_copy_fn)
-    for root in (pkg, other):
-        for m in root.rglob("*.meta"):
-            m.unlink()
-        assert unity_meta.main(["--package", str(root), "-q"]) == 0
-    first, second = meta_files(pkg), meta_files(other)
-    assert first and first == second
-    # ...and identical to the committed ones.
+def test_regenerating_keeps_every_committed_guid(pkg):
+    before = meta_files(pkg)
+    assert unity_meta.main(["--package", str(pkg), "-q"]) == 0
+    assert meta_files(pkg) == before
     committed = {k: v for k, v in meta_files(REAL_PACKAGE).items()
                  if not k.startswith("Runtime/Plugins") and not k.startswith("Native~")}
     assert len(committed) > 50
-    assert {k: first.get(k) for k in committed} == committed
+    assert {k: before.get(k) for k in committed} == committed
+
+
+def test_only_an_asset_without_a_meta_gets_a_new_guid(pkg):
+    rel = "Runtime/Core/MocapEngine.cs"
+    (pkg / (rel + ".meta")).unlink()
+    new_file = pkg / "Runtime/Core/NewThing.cs"
+    new_file.write_text("namespace Mocap.Imu { class NewThing {} }\n")
+    others = {m: g for m, g in unity_meta.read_guids(pkg).items()}
+    assert unity_meta.main(["--package", str(pkg), "-q"]) == 0
+    fresh = guid_of(pkg, rel), guid_of(pkg, "Runtime/Core/NewThing.cs")
+    assert all(re.fullmatch(r"[0-9a-f]{32}", g) for g in fresh)
+    assert fresh[0] != fresh[1]
+    assert not set(fresh) & set(others.values())
+    assert {m: g for m, g in unity_meta.read_guids(pkg).items() if m in others} == others
+    assert lint(pkg) == []
+
+
+def test_refreshing_an_importer_keeps_a_guid_that_is_not_the_path_hash(pkg):
+    meta = pkg / "Runtime/Core/MocapEngine.cs.meta"
+    chosen = "0123456789abcdef0123456789abcdef"
+    meta.write_text(unity_meta.meta_text("Runtime/Core/MocapEngine.cs", False, chosen)
+                    .replace("executionOrder: 0", "executionOrder: 100"))
+    assert unity_meta.main(["--package", str(pkg), "-q"]) == 0
+    assert meta.read_text() == unity_meta.meta_text("Runtime/Core/MocapEngine.cs", False, chosen)
+
+
+@pytest.mark.parametrize("old,new", [
+    ("Runtime/Core/MocapEngine.cs", "Runtime/Core/Engine/MocapEngineMoved.cs"),
+    ("Runtime/Core/Maths", "Runtime/Core/Mathematics"),
+    ("Runtime/HumanoidPoseDriver.cs", "Runtime/HumanoidPoseDriverRenamed.cs"),
+])
+def test_a_moved_or_renamed_asset_keeps_its_guid(pkg, old, new):
+    guid = guid_of(pkg, old)
+    target = pkg / new
+    target.parent.mkdir(parents=True, exist_ok=True)
+    (pkg / old).rename(target)
+    (pkg / (old + ".meta")).rename(pkg / (new + ".meta"))
+    unity_meta.main(["--package", str(pkg), "-q"])  # a new folder gets its own .meta
+    assert lint(pkg) == []
+    assert unity_meta.main(["--package", str(pkg), "--check"]) == 0
+    assert guid_of(pkg, new) == guid
+    # A new asset at the old path is another asset: it must not take the moved one's GUID.
+    if (pkg / new).is_file():
+        (pkg / old).write_text("// another file\n")
+        unity_meta.main(["--package", str(pkg), "-q"])
+        assert guid_of(pkg, old) != guid
+        assert lint(pkg) == []
 
 
 def test_generator_is_idempotent(pkg, capsys):
@@ -141,8 +211,9 @@ def test_generator_skips_tilde_folders_and_dot_files(pkg):
     ("LICENSE", False, "DefaultImporter:"),
 ])
 def test_importer_per_kind(rel, is_dir, needle):
-    text = unity_meta.meta_text(rel, is_dir)
-    assert text.startswith(f"fileFormatVersion: 2\nguid: {unity_meta.guid_for(rel)}\n")
+    guid = unity_meta.new_guid(rel, set())
+    text = unity_meta.meta_text(rel, is_dir, guid)
+    assert text.startswith(f"fileFormatVersion: 2\nguid: {guid}\n")
     assert needle in text
     assert ("folderAsset: yes" in text) == is_dir
 
@@ -154,7 +225,7 @@ def test_importer_per_kind(rel, is_dir, needle):
     ("Runtime/Plugins/macOS/mocap_imu.bundle", "OSX", "OSXUniversal"),
 ])
 def test_plugin_meta_enables_its_platform_only(rel, editor_os, player):
-    tree = package_lint.parse_meta(unity_meta.meta_text(rel, False))
+    tree = package_lint.parse_meta(unity_meta.meta_text(rel, False, "1" * 32))
     pdata = tree["PluginImporter"]["platformData"]
     enabled = {k for k, v in pdata.items() if v.get("enabled") == "1"}
     assert enabled == {"Editor", player}
@@ -164,7 +235,7 @@ def test_plugin_meta_enables_its_platform_only(rel, editor_os, player):
 
 def test_generator_removes_orphans_and_check_lists_them(pkg, capsys):
     orphan = pkg / "Runtime" / "Gone.cs.meta"
-    orphan.write_text(unity_meta.meta_text("Runtime/Gone.cs", False))
+    orphan.write_text(unity_meta.meta_text("Runtime/Gone.cs", False, "2" * 32))
     (pkg / "Runtime" / "Core" / "MocapEngine.cs.meta").unlink()
     assert unity_meta.main(["--package", str(pkg), "--check"]) == 1
     out = capsys.readouterr().out
@@ -219,7 +290,8 @@ def test_new_file_without_meta_is_reported(pkg):
 
 
 def test_orphan_meta(pkg):
-    (pkg / "Runtime/Deleted.cs.meta").write_text(unity_meta.meta_text("Runtime/Deleted.cs", False))
+    (pkg / "Runtime/Deleted.cs.meta").write_text(
+        unity_meta.meta_text("Runtime/Deleted.cs", False, "3" * 32))
     assert problems_about(lint(pkg), "Runtime/Deleted.cs.meta", "orphan .meta")
 
 
@@ -233,13 +305,36 @@ def test_orphan_plugin_meta_without_binary(pkg):
 def test_duplicated_guid(pkg):
     a = pkg / "Runtime/Core/MocapEngine.cs.meta"
     b = pkg / "Runtime/Core/MocapSession.cs.meta"
-    guid_a = unity_meta.guid_for("Runtime/Core/MocapEngine.cs")
-    b.write_text(b.read_text().replace(unity_meta.guid_for("Runtime/Core/MocapSession.cs"), guid_a))
+    guid_a = guid_of(pkg, "Runtime/Core/MocapEngine.cs")
+    b.write_text(b.read_text().replace(guid_of(pkg, "Runtime/Core/MocapSession.cs"), guid_a))
     problems = lint(pkg)
-    dup = [p for p in problems if "duplicate GUID " + guid_a in p]
-    assert len(dup) == 1 and "MocapEngine.cs.meta" in dup[0] and "MocapSession.cs.meta" in dup[0]
-    assert problems_about(problems, "MocapSession.cs.meta", "is not the path-derived")
-    assert a.exists()
+    assert len(problems) == 1, problems
+    assert "duplicate GUID " + guid_a in problems[0]
+    assert "MocapEngine.cs.meta" in problems[0] and "MocapSession.cs.meta" in problems[0]
+    # The generator cannot know which asset scenes reference: it reports and changes nothing.
+    before = meta_files(pkg)
+    assert unity_meta.main(["--package", str(pkg), "-q"]) == 1
+    assert meta_files(pkg) == before and a.exists()
+
+
+@pytest.mark.parametrize("bad", [
+    "0123456789ABCDEF0123456789ABCDEF",  # upper case: Unity writes lower case
+    "0123456789abcdef",                  # too short
+    "0123456789abcdef0123456789abcdeg",  # not hex
+    "",
+])
+def test_malformed_guid(pkg, bad):
+    meta = pkg / "Runtime/Core/MocapEngine.cs.meta"
+    meta.write_text(unity_meta.meta_text("Runtime/Core/MocapEngine.cs", False, bad))
+    problems = lint(pkg)
+    assert problems_about(problems, "MocapEngine.cs.meta", "is not 32 lower-case hex digits")
+    assert unity_meta.main(["--package", str(pkg), "--check"]) == 1
+
+
+def test_meta_without_a_guid_line(pkg):
+    meta = pkg / "Runtime/Core/MocapEngine.cs.meta"
+    meta.write_text(re.sub(r"^guid:.*\n", "", meta.read_text(), flags=re.M))
+    assert problems_about(lint(pkg), "MocapEngine.cs.meta", "GUID (none)")
 
 
 def test_hand_edited_importer_is_stale(pkg):
@@ -260,7 +355,7 @@ def test_broken_asmdef_reference(pkg):
 def test_asmdef_reference_by_guid(pkg):
     path = pkg / "Runtime/Mocap.Imu.asmdef"
     data = json.loads(path.read_text())
-    data["references"] = ["GUID:" + unity_meta.guid_for("Runtime/Core/Mocap.Imu.Core.asmdef")]
+    data["references"] = ["GUID:" + guid_of(pkg, "Runtime/Core/Mocap.Imu.Core.asmdef")]
     path.write_text(json.dumps(data, indent=4))
     assert lint(pkg) == []
     data["references"] = ["GUID:" + "0" * 32]
@@ -330,7 +425,7 @@ def test_invalid_asmdef_json(pkg):
 @pytest.mark.parametrize("key,value,message", [
     ("version", "0.1", "is not semver"),
     ("unity", "2022", 'is not like "2022.3"'),
-    ("name", "com.mocap.other", "GUIDs are derived from it"),
+    ("name", "com.mocap.other", "is not 'com.mocap.imu'"),
     ("displayName", "", '"displayName" is missing'),
     ("keywords", [], '"keywords" must be'),
     ("dependencies", {"com.github.asus4.onnxruntime": "latest"}, "is not name -> x.y.z"),
@@ -378,7 +473,7 @@ def test_plugin_meta_with_wrong_platform(pkg):
     add_plugin(pkg, rel)
     meta = pkg / (rel + ".meta")
     # A Windows importer on a Linux library (correct GUID): enables the wrong player and editor OS.
-    meta.write_text(unity_meta.meta_text(rel, False).split("PluginImporter:")[0]
+    meta.write_text(unity_meta.meta_text(rel, False, "4" * 32).split("PluginImporter:")[0]
                     + "PluginImporter:" + unity_meta.plugin_importer(".dll").split("PluginImporter:")[1])
     problems = lint(pkg)
     assert problems_about(problems, rel + ".meta", "must enable the Linux64 player")
@@ -389,11 +484,10 @@ def test_plugin_meta_with_default_importer(pkg):
     rel = "Runtime/Plugins/Windows/x86_64/mocap_imu.dll"
     add_plugin(pkg, rel)
     (pkg / (rel + ".meta")).write_text(unity_meta.meta_text("Runtime/Plugins/Windows/x86_64/x.txt",
-                                                            False).replace(
-        unity_meta.guid_for("Runtime/Plugins/Windows/x86_64/x.txt"), unity_meta.guid_for(rel)))
+                                                            False, "5" * 32))
     unity_meta_missing = unity_meta.plan(pkg)[0]
-    for m in unity_meta_missing:  # the new folders' metas
-        (pkg / m).write_text(unity_meta.meta_text(m[:-5], True))
+    for i, m in enumerate(unity_meta_missing):  # the new folders' metas
+        (pkg / m).write_text(unity_meta.meta_text(m[:-5], True, f"{i:032x}"))
     assert problems_about(lint(pkg), rel + ".meta", "no PluginImporter section")
 
 
@@ -437,3 +531,163 @@ def test_cli_exit_status_and_output(pkg):
     check = subprocess.run([sys.executable, str(SCRIPTS / "unity_meta.py"), "--package", str(pkg),
                             "--check"], capture_output=True, text=True)
     assert check.returncode == 1 and "Calibration.cs: missing .meta file" in check.stdout
+
+
+# ------------------------------------------------------------------ platforms of the assemblies
+
+NATIVE = ["Editor", "LinuxStandalone64", "macOSStandalone", "WindowsStandalone64"]
+
+
+@pytest.mark.parametrize("rel", [
+    "Runtime/Core/Mocap.Imu.Core.asmdef",
+    "Runtime/Mocap.Imu.asmdef",
+    "Tests/Runtime/Mocap.Imu.Tests.Runtime.asmdef",
+])
+def test_engine_assemblies_are_limited_to_the_plugin_platforms(rel):
+    data = json.loads((REAL_PACKAGE / rel).read_text())
+    assert set(data["includePlatforms"]) == set(NATIVE) and data["excludePlatforms"] == []
+
+
+@pytest.mark.parametrize("rel", [
+    "Runtime/Core/Mocap.Imu.Core.asmdef",
+    "Runtime/Mocap.Imu.asmdef",
+    "Tests/Runtime/Mocap.Imu.Tests.Runtime.asmdef",
+])
+def test_an_engine_assembly_on_every_platform_fails(pkg, rel):
+    edit_json(pkg / rel, includePlatforms=[])
+    problems = lint(pkg)
+    assert problems_about(problems, rel, "needs the native engine but compiles for")
+    assert problems_about(problems, rel, "Android")
+
+
+def test_an_engine_assembly_on_a_platform_without_plugin_fails(pkg):
+    rel = "Runtime/Mocap.Imu.asmdef"
+    edit_json(pkg / rel, includePlatforms=NATIVE + ["Android"])
+    problems = lint(pkg)
+    assert problems_about(problems, rel, "compiles for Android, where no plugin is built")
+    # ...and the runtime would compile on Android without the core it references.
+    assert problems_about(problems, rel, "compiles for Android, where its reference Mocap.Imu.Core")
+
+
+def test_excluding_platforms_instead_still_fails_for_the_rest(pkg):
+    rel = "Runtime/Core/Mocap.Imu.Core.asmdef"
+    edit_json(pkg / rel, includePlatforms=[], excludePlatforms=["Android", "iOS"])
+    problems = lint(pkg)
+    assert problems_about(problems, rel, "needs the native engine but compiles for")
+    assert problems_about(problems, rel, "WSA") and not problems_about(problems, rel, "Android")
+
+
+def test_a_reference_missing_on_a_platform_fails(pkg):
+    # The runtime narrowed to the Editor: the PlayMode tests (every native platform) lose it.
+    edit_json(pkg / "Runtime/Mocap.Imu.asmdef", includePlatforms=["Editor"])
+    problems = lint(pkg)
+    assert problems_about(problems, "Tests/Runtime/Mocap.Imu.Tests.Runtime.asmdef",
+                          "where its reference Mocap.Imu does not")
+    assert problems_about(problems, "Tests/Runtime/Mocap.Imu.Tests.Runtime.asmdef",
+                          "references Editor-only Mocap.Imu")
+    assert len(problems) == 2, problems
+
+
+@pytest.mark.parametrize("platforms,message", [
+    (["Editor", "Linux64"], "'Linux64', which is no Unity platform"),
+    (["Editor", "StandaloneWindows64"], "'StandaloneWindows64', which is no Unity platform"),
+    ("Editor", "must be a list of platform names"),
+])
+def test_platform_names_are_unitys(pkg, platforms, message):
+    rel = "Runtime/Core/Mocap.Imu.Core.asmdef"
+    edit_json(pkg / rel, includePlatforms=platforms)
+    assert problems_about(lint(pkg), rel, message)
+
+
+def test_include_and_exclude_together_fail(pkg):
+    rel = "Editor/Mocap.Imu.Editor.asmdef"
+    edit_json(pkg / rel, excludePlatforms=["Android"])
+    assert problems_about(lint(pkg), rel, "both set")
+
+
+def test_a_new_assembly_calling_the_engine_is_found_by_its_dllimport(pkg):
+    folder = pkg / "Runtime/Extra"
+    folder.mkdir()
+    (folder / "Extra.cs").write_text(
+        "using System.Runtime.InteropServices;\n"
+        "static class Extra { [DllImport(\"mocap_imu\")] static extern int mocap_api_version(); }\n")
+    edit_json(folder / "Mocap.Imu.Extra.asmdef", name="Mocap.Imu.Extra", references=[],
+              includePlatforms=[], noEngineReferences=True)
+    unity_meta.main(["--package", str(pkg), "-q"])
+    assert problems_about(lint(pkg), "Runtime/Extra/Mocap.Imu.Extra.asmdef",
+                          "needs the native engine")
+    edit_json(folder / "Mocap.Imu.Extra.asmdef", includePlatforms=NATIVE)
+    assert lint(pkg) == []
+
+
+# ------------------------------------------------------------------------- built-in modules
+
+def dependencies(pkg, **changes):
+    path = pkg / "package.json"
+    data = json.loads(path.read_text())
+    for name, version in changes.items():
+        name = name.replace("__", ".").replace("_", "-")
+        if version is None:
+            del data["dependencies"][name]
+        else:
+            data["dependencies"][name] = version
+    path.write_text(json.dumps(data, indent=2))
+
+
+def test_the_real_package_declares_the_modules_it_uses():
+    deps = json.loads((REAL_PACKAGE / "package.json").read_text())["dependencies"]
+    for module in ("physics", "animation", "imgui", "vr"):
+        assert deps[f"com.unity.modules.{module}"] == "1.0.0"
+    assert "com.unity.test-framework" in deps
+
+
+@pytest.mark.parametrize("module,user", [
+    ("physics", "Runtime/PhysicsCharacter.cs"),
+    ("animation", "Editor/MocapSessionComponentEditor.cs"),
+    ("imgui", "Editor/CalibrationWindow.cs"),
+    ("vr", "Samples~/VrAvatar/VrAvatarBootstrap.cs"),
+])
+def test_a_used_module_missing_from_the_dependencies_fails(pkg, module, user):
+    dependencies(pkg, **{f"com__unity__modules__{module}": None})
+    problems = lint(pkg)
+    assert problems_about(problems, "package.json", f"{user} uses")
+    assert problems_about(problems, "package.json", f"com.unity.modules.{module}")
+    assert len(problems) == 1, problems
+
+
+def test_a_declared_module_nothing_uses_fails(pkg):
+    dependencies(pkg, com__unity__modules__jsonserialize="1.0.0")
+    assert problems_about(lint(pkg), "package.json",
+                          "declares com.unity.modules.jsonserialize, which no script")
+
+
+def test_a_module_version_other_than_1_0_0_fails(pkg):
+    dependencies(pkg, com__unity__modules__physics="2.0.0")
+    assert problems_about(lint(pkg), "package.json", 'com.unity.modules.physics must be "1.0.0"')
+
+
+def test_comments_and_strings_are_not_uses_but_code_is(pkg):
+    path = pkg / "Runtime/HumanoidPoseDriver.cs"
+    text = path.read_text()
+    path.write_text(text + '\n// JsonUtility would do\n/* InputDevices */\n'
+                    'static class Names { const string A = "JsonUtility"; const string B = @"XRSettings"; }\n')
+    assert lint(pkg) == []
+    path.write_text(text + "\nstatic class Uses { static string S(object o) => "
+                    "UnityEngine.JsonUtility.ToJson(o); }\n")
+    assert problems_about(lint(pkg), "package.json",
+                          "Runtime/HumanoidPoseDriver.cs uses JsonUtility (built-in module "
+                          "com.unity.modules.jsonserialize)")
+
+
+def test_the_engine_free_core_is_not_scanned(pkg):
+    # The core's own names (its Avatar-free HumanBone, a "Physics" word) are not Unity's.
+    path = pkg / "Runtime/Core/MocapEngine.cs"
+    path.write_text(path.read_text() + "\nnamespace Mocap.Imu { static class Physics { } }\n")
+    dependencies(pkg, com__unity__modules__physics=None)
+    problems = lint(pkg)
+    assert [p for p in problems if "MocapEngine.cs" in p] == []
+
+
+def test_test_assemblies_need_the_test_framework(pkg):
+    dependencies(pkg, com__unity__test_framework=None)
+    assert problems_about(lint(pkg), "package.json", "needs com.unity.test-framework")
