@@ -4,9 +4,10 @@
 #   fuzz:         the HiPNUC decoder and the capture / calibration file readers under
 #                 libFuzzer for a bounded time
 #   windows:      every engine source cross-compiled for Windows (MinGW-w64, syntax + warnings)
-#   dotnet:       the C# core's NUnit tests against the real native library, and a C# 9 syntax
-#                 check of every file of the Unity package (the Unity glue cannot be compiled here),
-#                 which also fails a component or settings field shown in the inspector without a tooltip
+#   dotnet:       the C# core's NUnit tests against the real native library, and the Unity
+#                 compile gate: every asmdef and sample of the package compiled against a
+#                 declaration-only Unity API (2022.3 and Unity 6, editor and players), which also
+#                 fails a component or settings field shown in the inspector without a tooltip
 #   python:       pytest over training/
 #   unity package: pytest over scripts/tests (.meta generator and package linter, incl. a lint
 #                 of the real package: run scripts/unity_meta.py after adding files)
@@ -193,15 +194,16 @@ if [ -d "$ROOT/dotnet/Mocap.Imu.Core.Tests" ]; then
   fi
 fi
 
-if [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ] && ! command -v dotnet >/dev/null 2>&1; then
-  echo "=== C# syntax of the whole Unity package: dotnet SDK not found"
-  record "C# syntax (Unity package)" 0 1 0
-elif [ -d "$ROOT/dotnet/Mocap.Imu.SyntaxCheck" ]; then
-  # The Unity glue cannot be compiled here (no UnityEngine assemblies): parse all of it instead.
-  echo "=== C# syntax of the whole Unity package (C# 9, editor and player symbols)"
-  log="$BUILD/syntax.log"
-  (cd "$ROOT" && dotnet run --project dotnet/Mocap.Imu.SyntaxCheck -- Packages/com.mocap.imu) 2>&1 | tee "$log"
-  record_from "C# syntax (Unity package)" counts "$log"
+if ! command -v dotnet >/dev/null 2>&1; then
+  echo "=== Unity compile gate: dotnet SDK not found"
+  record_units "Unity compile gate" 0 1
+else
+  # Every asmdef and every sample alone, against a declaration-only Unity API, for Unity 2022.3
+  # and Unity 6, in the editor and in the Windows / Linux / macOS players (warnings are errors).
+  echo "=== Unity compile gate (2022.3 and 6000.0; editor and players; each sample alone)"
+  log="$BUILD/compile-gate.log"
+  (cd "$ROOT" && dotnet run --project dotnet/Mocap.Imu.CompileGate -- Packages/com.mocap.imu) 2>&1 | tee "$log"
+  record_from "Unity compile gate" units "$log"
 fi
 
 echo "=== python: pytest training/"

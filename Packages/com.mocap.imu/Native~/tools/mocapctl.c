@@ -69,6 +69,7 @@ static int print_usage(FILE *to, int status)
             "                 [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]\n"
             "  mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
             "                 [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
+            "                 [--metrics-json ACCURACY.json]   (with --truth: the accuracy as JSON)\n"
             "                 [--smoothing HZ[,BETA]]   (output filter; default 1,6; 0 = off)\n"
             "  mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
             "                 [--smoothing HZ[,BETA]]\n"
@@ -571,7 +572,7 @@ static int cmd_replay(int argc, char **argv)
     const char *capture = argv[0];
     /* Before any output is opened (they are opened for writing before the capture is read). */
     static const char *const replay_outputs[] = {"--csv", "--json", "--out", "--pose-csv",
-                                                 "--save-calibration", NULL};
+                                                 "--metrics-json", "--save-calibration", NULL};
     const char *truth_path = arg_value(argc, argv, "--truth");
     cli_refuse_overwriting(capture, "capture", argc, argv, replay_outputs);
     cli_refuse_overwriting(truth_path, "truth file", argc, argv, replay_outputs);
@@ -1022,6 +1023,52 @@ static void metrics_print(const pose_metrics *m, const char *truth_path)
            m->jitter_n ? m->truth_jitter_sum / (double)m->jitter_n / 100.0 : NAN);
 }
 
+/* A number for JSON: NaN and infinities (no pose, no drift window) become null. */
+static void json_number(FILE *f, const char *key, double value, const char *after)
+{
+    if (isfinite(value)) fprintf(f, "\"%s\":%.6g%s", key, value, after);
+    else fprintf(f, "\"%s\":null%s", key, after);
+}
+
+/* The figures metrics_print shows, for scripts and tests (--metrics-json). 0 when written. */
+static int metrics_write_json(const pose_metrics *m, const char *truth_path, const char *path)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "mocapctl: cannot write %s\n", path);
+        return 1;
+    }
+    const double n = m->compared ? (double)m->compared : NAN;
+    fputs("{", f);
+    fputs("\"truth\":\"", f);
+    for (const char *c = truth_path; *c; ++c) {
+        if (*c == '"' || *c == '\\') fputc('\\', f);
+        if ((unsigned char)*c >= 0x20) fputc(*c, f);
+    }
+    fprintf(f, "\",\"poses\":%llu,", (unsigned long long)m->compared);
+    json_number(f, "seconds", m->compared ? m->times[m->compared - 1] - m->times[0] : NAN, ",");
+    json_number(f, "angle_error_deg", m->angle_all / n, ",");
+    json_number(f, "angle_error_dip_deg", m->angle_dip / n, ",");
+    json_number(f, "sip_error_deg", m->sip / n, ",");
+    json_number(f, "position_error_cm", m->pos_cm / n, ",");
+    static const double windows[3] = {2.0, 5.0, 10.0};
+    static const char *const drift_keys[3] = {"2s", "5s", "10s"};
+    const double *roots[2] = {m->pred_root, m->vel_root};
+    static const char *const root_keys[2] = {"root_drift_m", "root_drift_integrated_velocity_m"};
+    for (int r = 0; r < 2; ++r) {
+        fprintf(f, "\"%s\":{", root_keys[r]);
+        for (int w = 0; w < 3; ++w) {
+            int count = 0;
+            double d = m->compared ? drift_mean(m, roots[r], windows[w], &count) : NAN;
+            json_number(f, drift_keys[w], d, w < 2 ? "," : "},");
+        }
+    }
+    json_number(f, "jitter_100m_s3", m->jitter_n ? m->jitter_sum / (double)m->jitter_n / 100.0 : NAN, ",");
+    json_number(f, "truth_jitter_100m_s3",
+                m->jitter_n ? m->truth_jitter_sum / (double)m->jitter_n / 100.0 : NAN, "}\n");
+    return close_output(&f, path);
+}
+
 static void write_pose_json(FILE *f, const mocap_pose *p)
 {
     fprintf(f, "{\"sequence\":%llu,\"frame_sequence\":%llu,\"time_s\":%.6f,\"flags\":%u,"
@@ -1125,6 +1172,7 @@ static int cmd_replay_pose(int argc, char **argv)
     const char *json_path = arg_value(argc, argv, "--json");
     const char *csv_path = arg_value(argc, argv, "--pose-csv");
     const char *truth_path = arg_value(argc, argv, "--truth");
+    const char *metrics_path = arg_value(argc, argv, "--metrics-json");
     const char *cal_path = arg_value(argc, argv, "--calibration");
     const char *save_cal = arg_value(argc, argv, "--save-calibration");
     const char *prelude = arg_value(argc, argv, "--prelude");
@@ -1158,6 +1206,10 @@ static int cmd_replay_pose(int argc, char **argv)
             return 1;
         }
         if (pose_truth_load(truth_path, &truth) != 0) return 1;
+    }
+    if (metrics_path && !truth_path) {
+        fprintf(stderr, "mocapctl: --metrics-json needs --truth (the accuracy is measured against it)\n");
+        return 2;
     }
     bvh_rotation_order bvh_order = BVH_ORDER_ZXY;
     if (order && strcmp(order, "xyz") == 0) bvh_order = BVH_ORDER_XYZ;
@@ -1304,6 +1356,8 @@ static int cmd_replay_pose(int argc, char **argv)
     }
     if (csv_path) printf("  wrote %s (one CSV line per pose)\n", csv_path);
     if (truth.rows) metrics_print(metrics, truth_path);
+    if (metrics_path && metrics_write_json(metrics, truth_path, metrics_path) != 0) goto done;
+    if (metrics_path) printf("  wrote %s (the accuracy figures as JSON)\n", metrics_path);
     (void)in_motion;
     rc = (cal_failed || written == 0) ? 1 : 0;
     if (written == 0) fprintf(stderr, "mocapctl: no pose was solved (calibration %s)\n",

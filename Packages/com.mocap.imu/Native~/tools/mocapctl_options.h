@@ -12,7 +12,7 @@ static const struct {
     {"synth", "--out= --truth= --motion= --seconds= --world= --noise= --seed= --corrupt= "
               "--dropout= --trajectory="},
     {"replay", "--truth= --calibration= --prelude= --save-calibration= --csv= --realtime --rate= "
-               "--model= --out= --bvh-order= --json= --pose-csv= --smoothing="},
+               "--model= --out= --bvh-order= --json= --pose-csv= --metrics-json= --smoothing="},
     {"live", "--port= --baud= --record= --seconds= --model= --pose --smoothing="},
     {"record", "--port= --out= --baud= --seconds="},
     {"stream", "--vmc= --replay= --realtime --speed= --prelude= --port= --baud= --model= --rate= "
