@@ -20,6 +20,7 @@
 using System;
 using System.Collections.Generic;
 using System.IO;
+using System.Runtime.InteropServices;
 using System.Text;
 
 namespace Mocap.Imu
@@ -74,6 +75,9 @@ namespace Mocap.Imu
         /// A package missing here is looked for under &lt;project&gt;/Packages.
         /// </summary>
         public Dictionary<string, string> PackageFolders = new Dictionary<string, string>();
+
+        /// <summary><c>Application.persistentDataPath</c> (a player's recordings and captures), or null.</summary>
+        public string PersistentDataPath;
 
         /// <summary>The value of $MOCAP_ONNXRUNTIME_PATH, or null; when set it is the only candidate.</summary>
         public string OnnxRuntimeOverride;
@@ -189,6 +193,58 @@ namespace Mocap.Imu
         public const string OnnxRuntimePackage = "com.github.asus4.onnxruntime";
 
         const string PackagesPrefix = "Packages/";
+
+        /// <summary>The OS this process runs on.</summary>
+        public static HostOs CurrentOs() =>
+            RuntimeInformation.IsOSPlatform(OSPlatform.Windows) ? HostOs.Windows
+            : RuntimeInformation.IsOSPlatform(OSPlatform.OSX) ? HostOs.MacOS
+            : HostOs.Linux;
+
+        /// <summary>The architecture of this process (an x64 editor under Rosetta is X64: it loads x64 plugins).</summary>
+        public static HostArchitecture CurrentArchitecture() =>
+            RuntimeInformation.ProcessArchitecture == Architecture.Arm64 ? HostArchitecture.Arm64 : HostArchitecture.X64;
+
+        /// <summary>
+        /// A data file the settings name (a capture to play back, a calibration to load). Editor: an
+        /// absolute path as is, a relative one against the project. Player: an absolute path as is;
+        /// a relative one under persistentDataPath (where the player records), then under
+        /// StreamingAssets (the path as given unless it names an editor folder, Assets/ or Packages/,
+        /// then the bare file name).
+        /// </summary>
+        /// <exception cref="ArgumentException"><paramref name="configuredPath"/> is empty.</exception>
+        public static PathLookup FindFile(RunningContext context, string configuredPath, string what, Func<string, bool> exists = null)
+        {
+            CheckContext(context);
+            if (string.IsNullOrWhiteSpace(configuredPath)) throw new ArgumentException($"no {what} path is set", nameof(configuredPath));
+            string configured = configuredPath.Trim();
+            var candidates = new List<string>(3);
+            if (Path.IsPathRooted(configured)) candidates.Add(Path.GetFullPath(configured));
+            else if (context.IsEditor) candidates.Add(ResolveInProject(context, configured));
+            else
+            {
+                if (!string.IsNullOrEmpty(context.PersistentDataPath))
+                    candidates.Add(Path.GetFullPath(Path.Combine(context.PersistentDataPath, ToOs(configured))));
+                if (!IsProjectAssetPath(configured))
+                    AddUnique(candidates, Path.GetFullPath(Path.Combine(RequireStreaming(context), ToOs(configured))));
+                AddUnique(candidates, Path.GetFullPath(Path.Combine(RequireStreaming(context), Path.GetFileName(configured))));
+            }
+            return Lookup(what, candidates, exists ?? File.Exists, null);
+        }
+
+        /// <summary>
+        /// The folder recordings go to: an absolute <paramref name="configuredFolder"/> as is, else
+        /// under the project (editor) or persistentDataPath (player); empty means "Captures".
+        /// </summary>
+        public static string RecordingFolder(RunningContext context, string configuredFolder)
+        {
+            CheckContext(context);
+            string folder = string.IsNullOrWhiteSpace(configuredFolder) ? "Captures" : configuredFolder.Trim();
+            if (Path.IsPathRooted(folder)) return Path.GetFullPath(folder);
+            if (context.IsEditor) return ResolveInProject(context, folder);
+            if (string.IsNullOrEmpty(context.PersistentDataPath))
+                throw new ArgumentException("a player context needs Application.persistentDataPath for recordings", nameof(context));
+            return Path.GetFullPath(Path.Combine(context.PersistentDataPath, ToOs(folder)));
+        }
 
         /// <summary>
         /// <c>Application.streamingAssetsPath</c> of a player with data folder <paramref name="dataPath"/>:

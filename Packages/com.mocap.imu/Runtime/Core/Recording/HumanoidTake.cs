@@ -56,6 +56,23 @@ namespace Mocap.Imu.Recording
 
         /// <summary>Key values, one per time.</summary>
         public float[] Values { get; }
+
+        /// <summary>
+        /// Per key, the slope that arrives at it (Keyframe.inTangent) and the one that leaves it
+        /// (Keyframe.outTangent): the slopes of the straight lines between neighbouring keys, so a
+        /// Unity curve passes linearly from key to key, the interpolation the reduction's error
+        /// bound assumes (the ends repeat their one neighbour's slope; a lone key has 0).
+        /// </summary>
+        public void LinearTangents(int key, out float inTangent, out float outTangent)
+        {
+            if ((uint)key >= (uint)Times.Length) throw new ArgumentOutOfRangeException(nameof(key), key, $"the curve has {Times.Length} keys");
+            float before = key > 0 ? Slope(key - 1) : float.NaN;
+            float after = key + 1 < Times.Length ? Slope(key) : float.NaN;
+            inTangent = float.IsNaN(before) ? (float.IsNaN(after) ? 0f : after) : before;
+            outTangent = float.IsNaN(after) ? (float.IsNaN(before) ? 0f : before) : after;
+        }
+
+        float Slope(int from) => (Values[from + 1] - Values[from]) / (Times[from + 1] - Times[from]);
     }
 
     /// <summary>

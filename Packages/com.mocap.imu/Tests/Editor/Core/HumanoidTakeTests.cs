@@ -312,6 +312,35 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void LinearTangentsMakeUnitysHermiteCurveTheStraightLineBetweenKeys()
+        {
+            var take = new HumanoidTake(30, Muscles, Bones);
+            for (ulong s = 0; s < 300; s++) Add(take, Smooth(s, 30));
+            foreach (var curve in take.HumanoidCurves(new KeyReduction(1f, 0.02f, 0.005f)).Take(9))
+            {
+                Assert.That(curve.Times.Length, Is.GreaterThan(2), curve.Property);
+                for (int k = 0; k + 1 < curve.Times.Length; k++)
+                {
+                    curve.LinearTangents(k, out _, out float leave);
+                    curve.LinearTangents(k + 1, out float arrive, out _);
+                    float t0 = curve.Times[k], t1 = curve.Times[k + 1], p0 = curve.Values[k], p1 = curve.Values[k + 1];
+                    foreach (float u in new[] { 0.25f, 0.5f, 0.8f })
+                    {
+                        // Cubic Hermite between two keys, as an unweighted AnimationCurve evaluates it.
+                        float dt = t1 - t0, u2 = u * u, u3 = u2 * u;
+                        float hermite = (2 * u3 - 3 * u2 + 1) * p0 + (u3 - 2 * u2 + u) * dt * leave +
+                                        (-2 * u3 + 3 * u2) * p1 + (u3 - u2) * dt * arrive;
+                        Assert.That(hermite, Is.EqualTo(p0 + (p1 - p0) * u).Within(1e-5f), $"{curve.Property} between keys {k} and {k + 1}");
+                    }
+                }
+            }
+            var single = new HumanoidTake(30, Muscles, Bones);
+            Add(single, Smooth(0, 30));
+            single.HumanoidCurves()[0].LinearTangents(0, out float a, out float b);
+            Assert.That((a, b), Is.EqualTo((0f, 0f)));
+        }
+
+        [Test]
         public void QuaternionCurvesShareKeyTimesSoTheyStayRotations()
         {
             var take = new HumanoidTake(60, Muscles, Bones);

@@ -235,6 +235,66 @@ namespace Mocap.Imu.Tests
             }
         }
 
+        // ---- other data files ---------------------------------------------------------------
+
+        [Test]
+        public void DataFilesResolveAgainstTheProjectInTheEditor()
+        {
+            var project = TestPaths.NewTempDirectory("project");
+            var capture = Touch(project, "Packages", "com.mocap.imu", "Tests", "Runtime", "Fixtures", "walk.cap");
+            var editor = RunningContext.Editor(HostOs.Linux, project);
+            Assert.That(PlayerPaths.FindFile(editor, "Packages/com.mocap.imu/Tests/Runtime/Fixtures/walk.cap", "capture").Path, Is.EqualTo(capture));
+            var missing = PlayerPaths.FindFile(editor, "Captures/none.cap", "capture");
+            StringAssert.StartsWith("the capture was not found", missing.Error);
+            StringAssert.Contains(Path.Combine(project, "Captures", "none.cap"), missing.Error);
+            Assert.Throws<ArgumentException>(() => PlayerPaths.FindFile(editor, " ", "capture"));
+        }
+
+        [Test]
+        public void PlayerDataFilesComeFromPersistentDataThenStreamingAssets()
+        {
+            var build = TestPaths.NewTempDirectory("build");
+            var player = RunningContext.Player(HostOs.Windows, PlayerDataFolder(HostOs.Windows, build));
+            player.PersistentDataPath = Path.Combine(TestPaths.NewTempDirectory("appdata"), "Company", "Game");
+            var missing = PlayerPaths.FindFile(player, "Captures/take.cap", "capture");
+            Assert.That(missing.Tried, Is.EqualTo(new[]
+            {
+                Path.Combine(player.PersistentDataPath, "Captures", "take.cap"),
+                Path.Combine(player.StreamingAssetsPath, "Captures", "take.cap"),
+                Path.Combine(player.StreamingAssetsPath, "take.cap"),
+            }));
+            var shipped = Touch(player.StreamingAssetsPath, "take.cap");
+            Assert.That(PlayerPaths.FindFile(player, "Captures/take.cap", "capture").Path, Is.EqualTo(shipped));
+            var recorded = Touch(player.PersistentDataPath, "Captures", "take.cap");
+            Assert.That(PlayerPaths.FindFile(player, "Captures/take.cap", "capture").Path, Is.EqualTo(recorded));
+        }
+
+        [Test]
+        public void RecordingsGoUnderTheProjectOrPersistentData()
+        {
+            var project = TestPaths.NewTempDirectory("project");
+            Assert.That(PlayerPaths.RecordingFolder(RunningContext.Editor(HostOs.Linux, project), ""),
+                        Is.EqualTo(Path.Combine(project, "Captures")));
+            var player = RunningContext.Player(HostOs.MacOS, Path.Combine(project, "Game.app", "Contents"));
+            Assert.Throws<ArgumentException>(() => PlayerPaths.RecordingFolder(player, "Takes"));
+            player.PersistentDataPath = Path.Combine(project, "Support");
+            Assert.That(PlayerPaths.RecordingFolder(player, "Takes"), Is.EqualTo(Path.Combine(project, "Support", "Takes")));
+            var absolute = Path.Combine(project, "Elsewhere");
+            Assert.That(PlayerPaths.RecordingFolder(player, absolute), Is.EqualTo(absolute));
+        }
+
+        [Test]
+        public void CurrentOsAndArchitectureAreThisMachines()
+        {
+            var expectedOs = Environment.OSVersion.Platform == PlatformID.Win32NT ? HostOs.Windows
+                           : File.Exists("/System/Library/CoreServices/SystemVersion.plist") ? HostOs.MacOS
+                           : HostOs.Linux;
+            Assert.That(PlayerPaths.CurrentOs(), Is.EqualTo(expectedOs));
+            Assert.That(PlayerPaths.CurrentArchitecture(),
+                        Is.EqualTo(IntPtr.Size == 8 && System.Runtime.InteropServices.RuntimeInformation.OSArchitecture.ToString() == "Arm64"
+                            ? HostArchitecture.Arm64 : HostArchitecture.X64));
+        }
+
         // ---- build step ------------------------------------------------------------------------
 
         [Test]
