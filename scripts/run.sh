@@ -37,5 +37,6 @@ m = make_motion('mixed', seconds=30, seed=7, name='procedural-mixed')
 synth_capture(None, '$OUT/pose-demo.cap', motion=m, seed=7, world='enu')
 ")
 "$MOCAPCTL" replay "$OUT/pose-demo.cap" --out "$OUT/demo.bvh" --json "$OUT/demo-poses.jsonl" \
-  --truth "$OUT/pose-demo.truth.csv"
-echo "pose outputs in $OUT: demo.bvh (SMPL-24, metres, 60 Hz; Blender: File > Import > BVH), demo-poses.jsonl"
+  --truth "$OUT/pose-demo.truth.csv" --metrics-json "$OUT/demo-accuracy.json"
+echo "pose outputs in $OUT: demo.bvh (SMPL-24, metres, 60 Hz; Blender: File > Import > BVH), demo-poses.jsonl,"
+echo "  demo-accuracy.json (the accuracy figures above)"

@@ -11,6 +11,8 @@
 #   python:       pytest over training/
 #   unity package: pytest over scripts/tests (.meta generator and package linter, incl. a lint
 #                 of the real package: run scripts/unity_meta.py after adding files)
+#   pose accuracy: the main job's replay of a generated capture through the shipped model stays
+#                 within bounds of today's accuracy (scripts/tests/test_pose_accuracy.py)
 # The counts are honest (scripts/test_results.py reads every runner's results):
 #   - a skipped test is counted as skipped, never as passed, and a skip that no line of
 #     scripts/allowed_skips.txt accepts is a failure (it nearly always means a missing dependency);
@@ -211,8 +213,14 @@ run_pytest_suite "python (training)" "$BUILD/pytest-training" training/tests
 
 echo "=== unity package: .meta files, package linter (pytest scripts/tests)"
 "$PY" "$ROOT/scripts/package_lint.py" || true # the problems, file by file
-MOCAP_MOCAPCTL="$BUILD/engine/mocapctl" \
-  run_pytest_suite "unity package (lint)" "$BUILD/pytest-scripts" scripts/tests
+MOCAP_MOCAPCTL="$BUILD/engine/mocapctl" run_pytest_suite "unity package (lint)" "$BUILD/pytest-scripts" \
+  scripts/tests --ignore=scripts/tests/test_pose_accuracy.py
+
+# The main job's pose accuracy on a generated capture, within bounds of today's figures; the
+# same bounds must catch deliberately broken copies of the shipped model.
+echo "=== pose accuracy: full-body replay through the shipped model (pytest)"
+MOCAP_MOCAPCTL="$BUILD/engine/mocapctl" run_pytest_suite "pose accuracy" "$BUILD/pytest-accuracy" \
+  scripts/tests/test_pose_accuracy.py
 
 echo
 echo "=== summary"
