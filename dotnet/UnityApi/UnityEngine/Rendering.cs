@@ -4,7 +4,14 @@ using System;
 namespace UnityEngine
 {
     public enum PrimitiveType { Sphere = 0, Capsule = 1, Cylinder = 2, Cube = 3, Plane = 4, Quad = 5 }
-    public enum LightType { Spot = 0, Directional = 1, Point = 2, Area = 3, Rectangle = 3, Disc = 4 }
+    public enum LightType
+    {
+        Spot = 0, Directional = 1, Point = 2,
+#if UNITY_6000_0_OR_NEWER
+        Rectangle = 3,
+#endif
+        Area = 3, Disc = 4,
+    }
     public enum LightShadows { None = 0, Hard = 1, Soft = 2 }
     public enum RenderMode { ScreenSpaceOverlay = 0, ScreenSpaceCamera = 1, WorldSpace = 2 }
 

@@ -44,11 +44,6 @@ namespace UnityEngine
         XboxOne = 27,
         tvOS = 31,
         Switch = 32,
-        Lumin = 33,
-        Stadia = 34,
-        LinuxServer = 43,
-        WindowsServer = 44,
-        OSXServer = 45,
     }
 
     public sealed partial class Application
