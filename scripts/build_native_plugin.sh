@@ -34,7 +34,7 @@ for arg in "$@"; do
     --with-hid) with_hid=ON ;;
     --pack) pack=1 ;;
     --host-toolchain) host_toolchain=1 ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "build_native_plugin: unknown option $arg" >&2; exit 2 ;;
   esac
 done

@@ -75,7 +75,7 @@ make_root() {
     [ ! -f "$staging/debootstrap/debootstrap.log" ] || tail -30 "$staging/debootstrap/debootstrap.log" >&2
     die "debootstrap failed (log: $log); if the archive no longer carries $SUITE, point MOCAP_DEBIAN_MIRROR at one that does"
   fi
-  # Package caches are only needed to install: dropping them halves the folder.
+  # Downloaded packages and indexes are only needed to install: the cache keeps what builds need.
   rm -rf "$staging"/var/cache/apt/archives/*.deb "$staging"/var/lib/apt/lists/*_Packages
   echo "$SUITE $PACKAGES" >"$staging/$MARKER"
   mv "$staging" "$ROOTFS"
@@ -116,6 +116,6 @@ case "$1" in
     fi
     exec "${clean_env[@]}" chroot "$ROOTFS" "$@"
     ;;
-  -h|--help) usage ;;
+  -h|--help) sed -n '7,14p' "$0"; exit 0 ;;
   *) usage ;;
 esac
