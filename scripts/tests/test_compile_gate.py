@@ -101,6 +101,14 @@ def test_broken_copies_fail_in_the_right_units_only(gate_dll, tmp_path):
     (pkg / "Runtime/EditorApiInRuntime.cs").write_text(
         "namespace Mocap.Imu { static class EditorApiInRuntime {\n"
         "    public static bool Playing => UnityEditor.EditorApplication.isPlaying; } }\n")
+    # A sample's editor script (Editor/ folder): Assembly-CSharp-Editor, which sees the sample's
+    # runtime scripts and UnityEditor, and exists in the editor only.
+    (pkg / "Samples~/VrAvatar/Editor").mkdir()
+    (pkg / "Samples~/VrAvatar/Editor/VrAvatarMenu.cs").write_text(
+        "static class VrAvatarMenu {\n"
+        "    [UnityEditor.MenuItem(\"Tools/Select VR bootstrap\")]\n"
+        "    static void Select() => UnityEditor.Selection.activeObject =\n"
+        "        UnityEngine.Object.FindAnyObjectByType<VrAvatarBootstrap>(); }\n")
     # An inspector field without a tooltip.
     (pkg / "Runtime/Untipped.cs").write_text(
         "namespace Mocap.Imu { public sealed class Untipped : UnityEngine.MonoBehaviour {\n"
@@ -126,6 +134,10 @@ def test_broken_copies_fail_in_the_right_units_only(gate_dll, tmp_path):
             assert bool(obsolete) == (version == "6000.0"), runtime
             editor_api = [d for d in runtime if "Runtime/EditorApiInRuntime.cs:" in d]
             assert bool(editor_api) == (target != "editor"), runtime
+
+        assert units[("Samples~/VrAvatar Assembly-CSharp-Editor", version, "editor")] == []
+        for player in PLAYERS:
+            assert ("Samples~/VrAvatar Assembly-CSharp-Editor", version, player) not in units
 
         editor_runtime = units[("Mocap.Imu", version, "editor")]
         assert any("Runtime/Untipped.cs:3: inspector field 'speed' of Untipped has no [Tooltip]" in d
