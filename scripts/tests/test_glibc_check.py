@@ -165,3 +165,82 @@ def test_missing_file_and_non_library_fail_clearly(tmp_path):
 def test_unknown_option_is_a_usage_error():
     rc, _ = _check("--max=2.35")
     assert rc == 2
+
+
+# The route the Linux plugin ships by: what is built in the Debian 11 root loads there (glibc 2.31)
+# and here and passes the check; the same source built here is refused by the check and by the
+# dynamic loader of glibc 2.31 alike, so the check stands for the real failure.
+BULLSEYE = REPO / "scripts" / "bullseye_root.sh"
+
+THREADS_C = """
+#include <pthread.h>
+#include <sys/stat.h>
+static void *run(void *arg) { return arg; }
+int start(const char *path) {
+    struct stat st;
+    pthread_t thread;
+    void *result = 0;
+    if (stat(path, &st) != 0) return -1;
+    if (pthread_create(&thread, 0, run, (void *)path) != 0) return -2;
+    pthread_join(thread, &result);
+    return result == (void *)path ? 0 : -3;
+}
+"""
+
+LOADER_C = """
+#include <dlfcn.h>
+#include <gnu/libc-version.h>
+#include <stdio.h>
+int main(int argc, char **argv) {
+    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { printf("refused: %s\\n", dlerror()); return 1; }
+    int (*start)(const char *) = (int (*)(const char *))dlsym(lib, "start");
+    printf("loaded on glibc %s, start() = %d\\n", gnu_get_libc_version(), start(argv[1]));
+    return 0;
+}
+"""
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="debootstrap and chroot need root (CI runs as root)")
+@pytest.mark.skipif(_host_glibc() < (2, 34),
+                    reason="this glibc versions pthread_create and stat at 2.31 or older")
+def test_built_in_the_bullseye_root_loads_on_glibc_2_31_and_a_host_build_does_not(tmp_path):
+    # Makes the root when it is missing (a few minutes, once per machine).
+    rootfs = Path(subprocess.run(["bash", str(BULLSEYE), "path"], check=True,
+                                 capture_output=True, text=True).stdout.strip())
+    inside = f"/work/pytest-glibc.{os.getpid()}"
+    work = rootfs / inside.lstrip("/")
+    work.mkdir(parents=True)
+    try:
+        (work / "threads.c").write_text(THREADS_C)
+        (work / "loader.c").write_text(LOADER_C)
+
+        def in_root(*cmd):
+            return subprocess.run(["bash", str(BULLSEYE), "run", *cmd], capture_output=True,
+                                  text=True)
+
+        for cmd in (["gcc", "-shared", "-fPIC", "-pthread", "-o", f"{inside}/old.so",
+                     f"{inside}/threads.c"],
+                    ["gcc", "-o", f"{inside}/loader", f"{inside}/loader.c", "-ldl"]):
+            built = in_root(*cmd)
+            assert built.returncode == 0, built.stderr
+        subprocess.run(["cc", "-shared", "-fPIC", "-pthread", "-o", str(work / "host.so"),
+                        str(work / "threads.c")], check=True)
+        subprocess.run(["cc", "-o", str(tmp_path / "loader"), str(work / "loader.c"), "-ldl"],
+                       check=True)
+
+        old = in_root(f"{inside}/loader", f"{inside}/old.so")
+        assert old.returncode == 0 and "loaded on glibc 2.31, start() = 0" in old.stdout, old
+        here = subprocess.run([str(tmp_path / "loader"), str(work / "old.so")],
+                              capture_output=True, text=True)
+        here_version = ".".join(map(str, _host_glibc()))
+        assert f"loaded on glibc {here_version}, start() = 0" in here.stdout, here
+        assert _check(work / "old.so")[0] == 0
+
+        new = in_root(f"{inside}/loader", f"{inside}/host.so")
+        assert new.returncode == 1, new
+        assert "refused:" in new.stdout and "not found" in new.stdout, new.stdout
+        rc, out = _check(work / "host.so")
+        assert rc == 1 and "pthread_create needs GLIBC_2.34" in out, out
+    finally:
+        shutil.rmtree(work)
