@@ -4,6 +4,10 @@
 // Plain dotnet: the test project copies libmocap_imu next to the test assembly and
 // scripts/test.sh sets MOCAP_MOCAPCTL. Unity's Test Runner: the library is the package's plugin
 // and MOCAP_MOCAPCTL (or a CMake build under <repo>/build/*/) provides mocapctl.
+//
+// A user's project that lists the package in "testables" has none of this repository's files:
+// there a test that needs them is ignored with the reason instead of failing (see
+// RepositoryAbsence). In this repository the same absence is a failure.
 
 using System;
 using System.Collections.Generic;
@@ -31,13 +35,37 @@ namespace Mocap.Imu.Tests
         public string BvhOrder;
     }
 
+    /// <summary>What a test does when the repository's engine build, mocapctl or model is absent.</summary>
+    internal enum AbsenceOutcome
+    {
+        /// <summary>This repository (or a run configured for it): the absence is a broken setup.</summary>
+        Fail,
+        /// <summary>A user's Unity project running the package's tests: the files cannot be there.</summary>
+        Ignore,
+    }
+
+    internal static class RepositoryAbsence
+    {
+        public const string IgnoreReason = "needs the com.mocap.imu repository's engine build: ";
+
+        /// <summary>
+        /// Ignore only where nothing says this is the repository: no MOCAP_MOCAPCTL (scripts/test.sh
+        /// and CI set it) and no repository root above the test assembly or the working folder.
+        /// </summary>
+        public static AbsenceOutcome Decide(bool mocapctlVariableSet, bool repositoryRootFound) =>
+            mocapctlVariableSet || repositoryRootFound ? AbsenceOutcome.Fail : AbsenceOutcome.Ignore;
+    }
+
     internal static class TestPaths
     {
         static string _tempRoot;
         static readonly Dictionary<string, SynthCapture> Captures = new Dictionary<string, SynthCapture>();
         static readonly Dictionary<string, PoseReplay> PoseReplays = new Dictionary<string, PoseReplay>();
 
-        /// <summary>The repository root: the folder holding Packages/com.mocap.imu/Native~.</summary>
+        /// <summary>
+        /// The repository root: the folder holding Packages/com.mocap.imu/Native~ and dotnet/
+        /// (a user's project that embeds the package has the first, never the second).
+        /// </summary>
         public static string RepoRoot
         {
             get
@@ -45,12 +73,41 @@ namespace Mocap.Imu.Tests
                 foreach (var start in new[] { TestContext.CurrentContext.TestDirectory, Directory.GetCurrentDirectory() })
                 {
                     for (var dir = new DirectoryInfo(start); dir != null; dir = dir.Parent)
-                        if (Directory.Exists(Path.Combine(dir.FullName, "Packages", "com.mocap.imu", "Native~")))
+                        if (Directory.Exists(Path.Combine(dir.FullName, "Packages", "com.mocap.imu", "Native~")) &&
+                            Directory.Exists(Path.Combine(dir.FullName, "dotnet", "Mocap.Imu.Core.Tests")))
                             return dir.FullName;
                 }
                 return null;
             }
         }
+
+        /// <summary>The repository root; outside the repository the test is ignored (see <see cref="RequireRepository"/>).</summary>
+        public static string RequireRepoRoot()
+        {
+            var root = RepoRoot;
+            if (root == null) RequireRepository("no repository root (a folder with Packages/com.mocap.imu/Native~ and dotnet/) above the tests");
+            return root;
+        }
+
+        /// <summary>
+        /// Stops a test that needs something only this repository provides: ignored with the
+        /// reason in a user's project, failed here (<see cref="RepositoryAbsence.Decide"/>).
+        /// </summary>
+        public static void RequireRepository(string missing) =>
+            throw AbsenceResult(missing);
+
+        internal static ResultStateException AbsenceResult(string missing) =>
+            AbsenceResult(missing, !string.IsNullOrEmpty(Environment.GetEnvironmentVariable("MOCAP_MOCAPCTL")), RepoRoot != null);
+
+        /// <summary>
+        /// The result a test ends with when <paramref name="missing"/> is absent: NUnit reports a
+        /// thrown <see cref="IgnoreException"/> as ignored with its message, an
+        /// <see cref="AssertionException"/> as failed.
+        /// </summary>
+        internal static ResultStateException AbsenceResult(string missing, bool mocapctlVariableSet, bool repositoryRootFound) =>
+            RepositoryAbsence.Decide(mocapctlVariableSet, repositoryRootFound) == AbsenceOutcome.Ignore
+                ? new IgnoreException(RepositoryAbsence.IgnoreReason + missing)
+                : (ResultStateException)new AssertionException(missing);
 
         /// <summary>mocapctl: $MOCAP_MOCAPCTL, else build/engine/mocapctl, else the newest build/*/mocapctl.</summary>
         public static string Mocapctl
@@ -74,7 +131,7 @@ namespace Mocap.Imu.Tests
                         .OrderByDescending(File.GetLastWriteTimeUtc).FirstOrDefault();
                     if (newest != null) return newest;
                 }
-                Assert.Fail("mocapctl not found: set MOCAP_MOCAPCTL or build the engine into <repo>/build/engine");
+                RequireRepository("mocapctl not found: set MOCAP_MOCAPCTL or build the engine into <repo>/build/engine");
                 return null;
             }
         }
@@ -92,8 +149,11 @@ namespace Mocap.Imu.Tests
                 var path = !string.IsNullOrEmpty(fromEnv)
                     ? fromEnv
                     : RepoRoot == null ? null : Path.Combine(RepoRoot, "Packages", "com.mocap.imu", "Runtime", "Models", "mocap_pose_fp32.onnx");
-                if (path == null || !File.Exists(path)) Assert.Fail($"the pose model was not found ({path ?? "no repository root"}); set MOCAP_MODEL");
-                return path;
+                if (path != null && File.Exists(path)) return path;
+                var missing = $"the pose model was not found ({path ?? "no repository root"}); set MOCAP_MODEL";
+                if (!string.IsNullOrEmpty(fromEnv)) Assert.Fail(missing);
+                RequireRepository(missing);
+                return null;
             }
         }
 
@@ -118,7 +178,7 @@ namespace Mocap.Imu.Tests
             return replay;
         }
 
-        /// <summary>Fails with a useful message when the native library cannot be loaded.</summary>
+        /// <summary>Fails (ignores, in a user's project) with a useful message when the native library cannot be loaded.</summary>
         public static void RequireEngine()
         {
             try
@@ -127,8 +187,8 @@ namespace Mocap.Imu.Tests
             }
             catch (DllNotFoundException e)
             {
-                Assert.Fail($"the native library mocap_imu was not found (looked beside {AppContext.BaseDirectory} " +
-                            $"and on the system path; build it with CMake and pass -p:MocapNativeDir=...): {e.Message}");
+                RequireRepository($"the native library mocap_imu was not found (looked beside {AppContext.BaseDirectory} " +
+                                  $"and on the system path; build it with CMake and pass -p:MocapNativeDir=...): {e.Message}");
             }
         }
 

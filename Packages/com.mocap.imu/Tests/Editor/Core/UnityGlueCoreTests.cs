@@ -72,7 +72,7 @@ namespace Mocap.Imu.Tests
         public void TheCommittedFixtureDrivesTheProceduralAvatarWithinThePlayModeBands()
         {
             TestPaths.RequireEngine();
-            var fixture = Path.Combine(TestPaths.RepoRoot, "Packages", "com.mocap.imu", "Tests", "Runtime", "Fixtures", "walk.cap");
+            var fixture = Path.Combine(TestPaths.RequireRepoRoot(), "Packages", "com.mocap.imu", "Tests", "Runtime", "Fixtures", "walk.cap");
             Assert.IsTrue(File.Exists(fixture), "the PlayMode fixture is missing: scripts/make_test_fixtures.sh");
             using var model = MocapModel.Open(TestPaths.ModelPath);
             var capture = new SynthCapture { CapturePath = fixture };
