@@ -8,7 +8,9 @@ namespace Mocap.Imu
     /// T-pose, each after a countdown; shows every sensor's stillness and quality from the engine's
     /// report, refuses a bad calibration with the engine's reason, and offers a heading reset.
     /// The sequence logic is the core's <see cref="CalibrationFlow"/>, the same one the editor's
-    /// Calibration window uses.
+    /// Calibration window uses. The panel is magnified on high-DPI screens, and with a
+    /// <see cref="worldAnchor"/> (the headset camera in VR, where a screen overlay is not seen)
+    /// its text is also shown on a world-space panel that follows the anchor.
     /// </summary>
     [AddComponentMenu("Mocap IMU/Calibration Overlay")]
     public sealed class CalibrationOverlay : MonoBehaviour
@@ -27,8 +29,18 @@ namespace Mocap.Imu
         public bool visible = true;
         [Tooltip("Key that shows or hides the overlay (None: no key).")]
         public KeyCode toggleKey = KeyCode.F1;
-        [Tooltip("Where the overlay is drawn on screen, in pixels.")]
+        [Tooltip("Where the overlay is drawn on screen, in pixels at 96 dpi.")]
         public Rect area = new Rect(10, 10, 460, 330);
+        [Tooltip("Magnify the overlay by the screen's density (Screen.dpi / 96) so that it stays readable on high-DPI screens.")]
+        public bool scaleWithDpi = true;
+
+        [Header("World-space panel (VR)")]
+        [Tooltip("When set (the headset camera in VR), the overlay's text is also shown on a panel in front of this transform that follows it.")]
+        public Transform worldAnchor;
+        [Tooltip("Distance of the world-space panel in front of the anchor, metres.")]
+        [Min(0.1f)] public float worldDistance = 1.2f;
+        [Tooltip("Height of one line of text on the world-space panel, metres.")]
+        [Min(0.001f)] public float worldLineHeight = 0.035f;
 
         /// <summary>One character of a <see cref="MocapSessionComponent"/> as a calibration target.</summary>
         sealed class CharacterTarget : ICalibrationTarget
@@ -50,6 +62,12 @@ namespace Mocap.Imu
         readonly CalibrationReportLines _sensorLines = new CalibrationReportLines();
         string _title, _titleName, _collecting, _recording, _recordingPath;
         int _collectingPercent = -1;
+        // Title, session or step, instruction, progress, one line per sensor.
+        readonly PanelText _worldLines = new PanelText(4 + MocapSession.SensorCount);
+        TextMesh _worldText;
+        // The built-in font of Unity 2022.2 and later (Arial.ttf before).
+        const string WorldFont = "LegacyRuntime.ttf";
+        const int WorldFontSize = 64;
 
         /// <summary>The guided flow (phase, step, countdown, refusal reason).</summary>
         public CalibrationFlow Flow => _flow ??= new CalibrationFlow(_target, _settings);
@@ -103,6 +121,26 @@ namespace Mocap.Imu
         void OnGUI()
         {
             if (!visible) return;
+            // IMGUI state is shared with every other OnGUI: leave it as it was found.
+            var matrix = GUI.matrix;
+            var color = GUI.color;
+            bool enabledBefore = GUI.enabled;
+            float scale = scaleWithDpi ? OverlayScale.For(Screen.dpi, Screen.width, Screen.height, area.xMax, area.yMax) : 1f;
+            GUI.matrix = matrix * Matrix4x4.Scale(new Vector3(scale, scale, 1f));
+            try
+            {
+                DrawPanel(enabledBefore);
+            }
+            finally
+            {
+                GUI.matrix = matrix;
+                GUI.color = color;
+                GUI.enabled = enabledBefore;
+            }
+        }
+
+        void DrawPanel(bool enabledBefore)
+        {
             GUILayout.BeginArea(area, GUI.skin.box);
             GUILayout.Label(Title());
             if (session == null || session.Status != MocapComponentStatus.Running)
@@ -133,16 +171,16 @@ namespace Mocap.Imu
             }
 
             GUILayout.BeginHorizontal();
-            GUI.enabled = !flow.IsBusy;
+            GUI.enabled = enabledBefore && !flow.IsBusy;
             if (GUILayout.Button("Calibrate (heading + T-pose)")) flow.StartFullCalibration(Now);
             if (GUILayout.Button("T-pose only")) flow.StartTPoseOnly(Now);
             if (GUILayout.Button("Heading reset")) flow.StartHeadingReset(Now);
-            GUI.enabled = true;
+            GUI.enabled = enabledBefore;
             if (flow.Phase == CalibrationFlowPhase.AwaitingTPose && GUILayout.Button("Continue")) flow.Continue(Now);
             if (flow.Phase == CalibrationFlowPhase.Refused && GUILayout.Button("Retry")) flow.Retry(Now);
-            GUI.enabled = flow.IsBusy;
+            GUI.enabled = enabledBefore && flow.IsBusy;
             if (GUILayout.Button("Cancel")) flow.Cancel();
-            GUI.enabled = true;
+            GUI.enabled = enabledBefore;
             GUILayout.EndHorizontal();
 
             GUILayout.BeginHorizontal();
@@ -154,6 +192,69 @@ namespace Mocap.Imu
             GUILayout.EndHorizontal();
             if (session.IsRecording) GUILayout.Label(Recording(session.GetRecordingPath(character)));
             GUILayout.EndArea();
+        }
+
+        void LateUpdate()
+        {
+            if (worldAnchor == null || !visible)
+            {
+                if (_worldText != null) _worldText.gameObject.SetActive(false);
+                return;
+            }
+            if (_worldText == null) _worldText = CreateWorldText();
+            var panel = _worldText.transform;
+            if (panel.parent != worldAnchor)
+            {
+                // A child of the anchor: it follows the head at render time, after XR tracking moves it.
+                panel.SetParent(worldAnchor, false);
+                panel.localRotation = Quaternion.identity;
+            }
+            panel.localPosition = new Vector3(0f, 0f, worldDistance);
+            _worldText.characterSize = worldLineHeight * 10f / WorldFontSize;
+            _worldText.gameObject.SetActive(true);
+
+            _worldLines.Begin();
+            _worldLines.Add(Title());
+            if (session == null || session.Status != MocapComponentStatus.Running)
+            {
+                _worldLines.Add(session == null ? "Assign a MocapSessionComponent." : SessionLine(session));
+            }
+            else
+            {
+                var flow = Flow;
+                _worldLines.Add(flow.Phase == CalibrationFlowPhase.Idle ? "Calibration" : CalibrationFlow.StepTitle(flow.CurrentStep));
+                _worldLines.Add(flow.Instruction);
+                if (flow.Phase == CalibrationFlowPhase.Collecting) _worldLines.Add(Collecting(flow.Progress));
+                if (flow.TryGetReport(out var report) && report.State != CalibrationState.Idle)
+                    for (int s = 0; s < MocapSession.SensorCount; s++)
+                        _worldLines.Add(_sensorLines.GetLine(report, (MocapSegment)s));
+            }
+            var text = _worldLines.Text;
+            if (!ReferenceEquals(text, _worldText.text)) _worldText.text = text;
+        }
+
+        TextMesh CreateWorldText()
+        {
+            var go = new GameObject("Calibration panel");
+            var mesh = go.AddComponent<TextMesh>();
+            var font = Resources.GetBuiltinResource<Font>(WorldFont);
+            mesh.font = font;
+            mesh.fontSize = WorldFontSize;
+            mesh.anchor = TextAnchor.MiddleCenter;
+            mesh.alignment = TextAlignment.Left;
+            mesh.color = Color.white;
+            if (font != null) go.GetComponent<MeshRenderer>().sharedMaterial = font.material;
+            return mesh;
+        }
+
+        void OnDisable()
+        {
+            if (_worldText != null) _worldText.gameObject.SetActive(false);
+        }
+
+        void OnDestroy()
+        {
+            if (_worldText != null) Destroy(_worldText.gameObject);
         }
 
         string Title()

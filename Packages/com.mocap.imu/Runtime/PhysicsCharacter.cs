@@ -16,10 +16,13 @@ namespace Mocap.Imu
     /// <remarks>
     /// The physics links are built at Start in a separate root object (not under the avatar), one
     /// per driven bone, with the bones' bind pose; the avatar must still be in its bind pose then.
+    /// They are built again when the driver reads its avatar again (a new rig) and dropped when
+    /// the rig or one of its bones is gone; their collision ignores are applied again on enable.
     /// A floor collider must exist in the scene. Joint targets are the rotation vector of each
     /// bone's rotation from its bind pose, in the bone's own frame (twist = X, swing = Y, Z).
     /// </remarks>
     [DefaultExecutionOrder(100)]
+    [DisallowMultipleComponent]
     [RequireComponent(typeof(HumanoidPoseDriver))]
     [AddComponentMenu("Mocap IMU/Physics Character")]
     public sealed class PhysicsCharacter : MonoBehaviour
@@ -56,6 +59,8 @@ namespace Mocap.Imu
         HumanoidPoseDriver _driver;
         GameObject _physicsRoot;
         ArticulationBody[] _links = Array.Empty<ArticulationBody>();
+        Collider[] _colliders = Array.Empty<Collider>();
+        readonly PhysicsLinkTracker _tracker = new PhysicsLinkTracker();
         bool _teleported;
         bool _drivesDirty = true;
 
@@ -68,7 +73,61 @@ namespace Mocap.Imu
         void Start()
         {
             _driver = GetComponent<HumanoidPoseDriver>();
-            Build();
+            FollowRig();
+        }
+
+        // After the driver's Update (execution order), before any LateUpdate writes a pose: a rig
+        // the driver has just read again is still in its bind pose, which new links copy.
+        void Update() => FollowRig();
+
+        void FollowRig()
+        {
+            if (_driver == null) return;
+            var rig = _driver.Rig;
+            switch (_tracker.Check(rig, rig != null && AnyBoneDestroyed()))
+            {
+                case PhysicsLinkAction.Build:
+                    Build();
+                    break;
+                case PhysicsLinkAction.Rebuild:
+                    DestroyLinks();
+                    Build();
+                    break;
+                case PhysicsLinkAction.Clear:
+                    DestroyLinks();
+                    break;
+            }
+        }
+
+        bool AnyBoneDestroyed()
+        {
+            for (int i = 0; i < _driver.BoneCount; i++)
+                if (_driver.GetBone(i) == null) return true;
+            return false;
+        }
+
+        void DestroyLinks()
+        {
+            if (_physicsRoot != null)
+            {
+                // Destroy lands at the end of the frame: inactive until then, the old links touch nothing.
+                _physicsRoot.SetActive(false);
+                Destroy(_physicsRoot);
+            }
+            _physicsRoot = null;
+            _links = Array.Empty<ArticulationBody>();
+            _colliders = Array.Empty<Collider>();
+            _tracker.Cleared();
+            _teleported = false;
+        }
+
+        // Links touch their neighbours: only the world (floor, props) should collide with them.
+        void ApplyIgnores()
+        {
+            for (int a = 0; a < _colliders.Length; a++)
+                for (int b = a + 1; b < _colliders.Length; b++)
+                    Physics.IgnoreCollision(_colliders[a], _colliders[b]);
+            _tracker.IgnoresApplied();
         }
 
         void OnValidate() => _drivesDirty = true;
@@ -82,6 +141,8 @@ namespace Mocap.Imu
         {
             if (_driver != null) _driver.WriteTransforms = true;
             if (_physicsRoot != null) _physicsRoot.SetActive(false);
+            // Unity forgets a deactivated collider's ignored pairs.
+            _tracker.Deactivated();
         }
 
         void OnEnable()
@@ -90,6 +151,7 @@ namespace Mocap.Imu
             {
                 _physicsRoot.SetActive(true);
                 _teleported = false;
+                if (_tracker.NeedsIgnores) ApplyIgnores();
             }
         }
 
@@ -143,10 +205,9 @@ namespace Mocap.Imu
                 colliders.Add(AddCollider(go, rig, i, hipsHeight));
                 _links[i] = body;
             }
-            // Links touch their neighbours: only the world (floor, props) should collide with them.
-            for (int a = 0; a < colliders.Count; a++)
-                for (int b = a + 1; b < colliders.Count; b++)
-                    Physics.IgnoreCollision(colliders[a], colliders[b]);
+            _colliders = colliders.ToArray();
+            _tracker.Built(rig);
+            ApplyIgnores();
             _drivesDirty = true;
             _teleported = false;
         }
