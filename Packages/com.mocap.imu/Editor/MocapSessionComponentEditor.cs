@@ -186,9 +186,16 @@ namespace Mocap.Imu.Editor
                 }
                 else
                 {
+                    var previousColor = GUI.color;
                     GUI.color = Color.red;
-                    if (GUILayout.Button($"Stop ({recorder.Frames} frames, {recorder.Seconds:0.0} s)")) StopTake(recorder);
-                    GUI.color = Color.white;
+                    try
+                    {
+                        if (GUILayout.Button($"Stop ({recorder.Frames} frames, {recorder.Seconds:0.0} s)")) StopTake(recorder);
+                    }
+                    finally
+                    {
+                        GUI.color = previousColor;
+                    }
                 }
             }
         }

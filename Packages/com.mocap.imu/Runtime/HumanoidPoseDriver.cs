@@ -21,6 +21,7 @@ namespace Mocap.Imu
     /// <para>Nothing is allocated per frame.</para>
     /// </remarks>
     [RequireComponent(typeof(Animator))]
+    [DisallowMultipleComponent]
     [AddComponentMenu("Mocap IMU/Humanoid Pose Driver")]
     public sealed class HumanoidPoseDriver : MonoBehaviour
     {

@@ -52,11 +52,11 @@ namespace Mocap.Imu
 
         [Header("Status (read only)")]
         [Tooltip("Idle, Opening, Running, Ended (every playback finished) or Failed (see Last Error).")]
-        [SerializeField] MocapComponentStatus status;
+        [SerializeField, ReadOnlyField] MocapComponentStatus status;
         [Tooltip("Per character: connection, poses solved, calibration, sensors seen, recording size, errors.")]
-        [SerializeField, TextArea(2, 8)] string statusText = "";
+        [SerializeField, ReadOnlyField(8)] string statusText = "";
         [Tooltip("The last error the engine or the glue reported.")]
-        [SerializeField, TextArea(1, 4)] string lastError = "";
+        [SerializeField, ReadOnlyField(4)] string lastError = "";
 
         // Everything opened by one worker-thread open; disposed as a unit, in the right order.
         sealed class Engine : IDisposable

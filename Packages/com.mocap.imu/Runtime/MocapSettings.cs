@@ -16,7 +16,7 @@ namespace Mocap.Imu
         public MocapSourceKind source = MocapSourceKind.Serial;
 
         [Tooltip("Serial: the port (\"COM3\", \"/dev/ttyUSB0\"). HID: a hidraw path, or empty to use vendor/product id.")]
-        public string port = "COM3";
+        public string port = SerialPortDefaults.DefaultPort(PlayerPaths.CurrentOs());
 
         [Tooltip("Serial baud rate.")]
         public int baud = 460800;

@@ -7,8 +7,9 @@ namespace Mocap.Imu
     /// <summary>
     /// Builds a Humanoid avatar from code with the model's proportions in its T-pose (the core's
     /// <see cref="HumanoidLayout"/>): a transform per driven bone, an Animator with a human Avatar
-    /// made by AvatarBuilder, and optional primitive visuals. For samples and PlayMode tests that
-    /// must run without an avatar asset; any real Humanoid avatar works the same way.
+    /// made by AvatarBuilder (destroyed with the character, see <see cref="RuntimeAvatarOwner"/>),
+    /// and optional primitive visuals. For samples and PlayMode tests that must run without an
+    /// avatar asset; any real Humanoid avatar works the same way.
     /// </summary>
     public static class ProceduralHumanoid
     {
@@ -60,6 +61,8 @@ namespace Mocap.Imu
             animator.avatar = avatar;
             animator.applyRootMotion = false;
             animator.Rebind();
+            // The Avatar is not a component: without an owner it outlives the character.
+            root.AddComponent<RuntimeAvatarOwner>().Owned = avatar;
 
             if (visuals)
             {

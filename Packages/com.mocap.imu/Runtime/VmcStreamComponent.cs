@@ -20,6 +20,7 @@ namespace Mocap.Imu
     /// character's newest pose once per new pose; nothing is allocated per frame.
     /// </summary>
     [DefaultExecutionOrder(-50)]
+    [DisallowMultipleComponent]
     [AddComponentMenu("Mocap IMU/VMC Stream")]
     public sealed class VmcStreamComponent : MonoBehaviour
     {
@@ -34,7 +35,7 @@ namespace Mocap.Imu
 
         [Header("Status (read only)")]
         [Tooltip("Per destination: bundles sent and failed sends, or why it could not be opened.")]
-        [SerializeField, TextArea(1, 6)] string statusText = "";
+        [SerializeField, ReadOnlyField(6)] string statusText = "";
 
         VmcSender[] _senders = Array.Empty<VmcSender>();
         ulong[] _lastSequence = Array.Empty<ulong>();

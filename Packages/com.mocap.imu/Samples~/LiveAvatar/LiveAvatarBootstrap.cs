@@ -11,7 +11,7 @@ public sealed class LiveAvatarBootstrap : MonoBehaviour
     [Tooltip("Settings asset to use; empty = default settings with the serial port below.")]
     public MocapSettings settings;
     [Tooltip("Serial port of the HiPNUC receiver when no settings asset is assigned.")]
-    public string serialPort = "COM3";
+    public string serialPort = SerialPortDefaults.DefaultPort(PlayerPaths.CurrentOs());
     [Tooltip("Humanoid avatar to drive; empty = a procedural one.")]
     public Animator avatar;
     [Tooltip("TPose: the avatar's bind pose is a T-pose. AlignToSmplTPose: any bind pose, straightened to the model's T-pose.")]
