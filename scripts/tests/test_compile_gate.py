@@ -101,6 +101,9 @@ def test_broken_copies_fail_in_the_right_units_only(gate_dll, tmp_path):
     (pkg / "Runtime/EditorApiInRuntime.cs").write_text(
         "namespace Mocap.Imu { static class EditorApiInRuntime {\n"
         "    public static bool Playing => UnityEditor.EditorApplication.isPlaying; } }\n")
+    # UnityEngine in the engine-free core, whose asmdef says noEngineReferences.
+    (pkg / "Runtime/Core/UsesTheEngine.cs").write_text(
+        "namespace Mocap.Imu { static class UsesTheEngine { public static UnityEngine.Vector3 Up => UnityEngine.Vector3.up; } }\n")
     # A sample's editor script (Editor/ folder): Assembly-CSharp-Editor, which sees the sample's
     # runtime scripts and UnityEditor, and exists in the editor only.
     (pkg / "Samples~/VrAvatar/Editor").mkdir()
@@ -143,8 +146,10 @@ def test_broken_copies_fail_in_the_right_units_only(gate_dll, tmp_path):
         assert any("Runtime/Untipped.cs:3: inspector field 'speed' of Untipped has no [Tooltip]" in d
                    for d in editor_runtime), editor_runtime
         assert not any("'documented'" in d for d in editor_runtime)
-        # Assemblies that only reference the broken one still compile.
-        assert units[("Mocap.Imu.Core", version, "editor")] == []
+        for target in ("editor",) + PLAYERS:
+            core = units[("Mocap.Imu.Core", version, target)]
+            assert any("Runtime/Core/UsesTheEngine.cs:" in d and "UnityEngine" in d for d in core), core
+        # An assembly that references broken ones without using what broke still compiles.
         assert units[("Mocap.Imu.Tests.Editor", version, "editor")] == []
 
 
