@@ -10,6 +10,7 @@ namespace UnityEngine
         public static Vector3 gravity { get => throw null; set => throw null; }
         public static void IgnoreCollision(Collider collider1, Collider collider2) => throw null;
         public static void IgnoreCollision(Collider collider1, Collider collider2, bool ignore) => throw null;
+        public static bool GetIgnoreCollision(Collider collider1, Collider collider2) => throw null;
         public static bool Raycast(Vector3 origin, Vector3 direction, out RaycastHit hitInfo, float maxDistance) => throw null;
         public static void SyncTransforms() => throw null;
         public static bool autoSyncTransforms { get => throw null; set => throw null; }
