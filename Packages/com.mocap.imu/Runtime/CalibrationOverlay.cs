@@ -65,6 +65,8 @@ namespace Mocap.Imu
         // Title, session or step, instruction, progress, one line per sensor.
         readonly PanelText _worldLines = new PanelText(4 + MocapSession.SensorCount);
         TextMesh _worldText;
+        // What the TextMesh shows: its text getter makes a new string on every call.
+        string _worldTextShown;
         // The built-in font of Unity 2022.2 and later (Arial.ttf before).
         const string WorldFont = "LegacyRuntime.ttf";
         const int WorldFontSize = 64;
@@ -201,7 +203,11 @@ namespace Mocap.Imu
                 if (_worldText != null) _worldText.gameObject.SetActive(false);
                 return;
             }
-            if (_worldText == null) _worldText = CreateWorldText();
+            if (_worldText == null)
+            {
+                _worldText = CreateWorldText();
+                _worldTextShown = null;
+            }
             var panel = _worldText.transform;
             if (panel.parent != worldAnchor)
             {
@@ -230,7 +236,7 @@ namespace Mocap.Imu
                         _worldLines.Add(_sensorLines.GetLine(report, (MocapSegment)s));
             }
             var text = _worldLines.Text;
-            if (!ReferenceEquals(text, _worldText.text)) _worldText.text = text;
+            if (!ReferenceEquals(text, _worldTextShown)) _worldText.text = _worldTextShown = text;
         }
 
         TextMesh CreateWorldText()
