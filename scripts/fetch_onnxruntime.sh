@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Fetches the ONNX Runtime C library and headers the engine loads at run time (dlopen) and
 # compiles against (headers only). Source: the npm package com.github.asus4.onnxruntime@0.4.9
-# (a Unity package of ONNX Runtime 1.29.0, MIT licence). Only two things are kept:
+# (a Unity package of ONNX Runtime 1.29.0, MIT licence). Only these are kept:
 #   build/third_party/onnxruntime/lib/libonnxruntime.so (+ libonnxruntime.so.1 SONAME link)
 #   build/third_party/onnxruntime/include/*.h           (the C API headers)
+#   build/third_party/onnxruntime/win-x64/onnxruntime.dll, onnxruntime_providers_shared.dll
+#                                                       (the Windows build, for the engine's
+#                                                       tests under Wine: scripts/test_windows.sh)
 # build/ is git-ignored: the binaries are never committed.
 #
 # Idempotent: a second run checks what is there and does nothing. The tarball is verified
@@ -29,8 +32,17 @@ die() { echo "fetch_onnxruntime: error: $*" >&2; exit 1; }
 force=0
 [ "${1:-}" = "--force" ] && force=1
 
-if [ $force -eq 0 ] && [ -f "$STAMP" ] && [ -f "$DEST/lib/libonnxruntime.so" ] \
-   && [ -L "$DEST/lib/libonnxruntime.so.1" ] && [ -f "$DEST/include/onnxruntime_c_api.h" ]; then
+WIN_DLLS=(onnxruntime.dll onnxruntime_providers_shared.dll)
+have_windows() {
+  local f
+  for f in "${WIN_DLLS[@]}"; do [ -f "$DEST/win-x64/$f" ] || return 1; done
+}
+have_linux() {
+  [ -f "$STAMP" ] && [ -f "$DEST/lib/libonnxruntime.so" ] && [ -L "$DEST/lib/libonnxruntime.so.1" ] \
+    && [ -f "$DEST/include/onnxruntime_c_api.h" ]
+}
+
+if [ $force -eq 0 ] && have_linux && have_windows; then
   say "ONNX Runtime from $PKG@$VERSION already in $DEST (nothing to do)"
   exit 0
 fi
@@ -75,9 +87,28 @@ else
   say "checksums verified (sha1 $SHA1, sha512 integrity)"
 fi
 
-# Extract only the Linux x64 library and the C headers (from the iOS framework's Headers folder).
 work=$(mktemp -d "$THIRD/extract.XXXXXX")
 trap 'rm -rf "$work"' EXIT
+
+# The Windows x64 DLLs, from the same verified tarball, beside the Linux files (which stay as
+# they are when already there: other builds may be using them).
+if [ $force -eq 1 ] || ! have_windows; then
+  win_members=()
+  for f in "${WIN_DLLS[@]}"; do
+    m=$(tar -tzf "$THIRD/$TARBALL" | grep -E "^package/Plugins/Windows/x64/${f//./\\.}\$" | head -n1 || true)
+    [ -n "$m" ] || die "$TARBALL has no Plugins/Windows/x64/$f"
+    win_members+=("$m")
+  done
+  tar -xzf "$THIRD/$TARBALL" -C "$work" "${win_members[@]}"
+  mkdir -p "$DEST/win-x64"
+  for m in "${win_members[@]}"; do cp "$work/$m" "$DEST/win-x64/$(basename "$m")"; done
+  say "extracted ${WIN_DLLS[*]} -> $DEST/win-x64"
+fi
+if [ $force -eq 0 ] && have_linux; then
+  exit 0
+fi
+
+# Extract only the Linux x64 library and the C headers (from the iOS framework's Headers folder).
 lib_member=$(tar -tzf "$THIRD/$TARBALL" | grep -E '^package/Plugins/Linux/x64/libonnxruntime\.so$' | head -n1 || true)
 [ -n "$lib_member" ] || die "$TARBALL has no Plugins/Linux/x64/libonnxruntime.so"
 hdr_member=$(tar -tzf "$THIRD/$TARBALL" | grep -E '/Headers/onnxruntime_c_api\.h$' | head -n1 || true)
@@ -85,7 +116,7 @@ hdr_member=$(tar -tzf "$THIRD/$TARBALL" | grep -E '/Headers/onnxruntime_c_api\.h
 hdr_dir=$(dirname "$hdr_member")
 tar -xzf "$THIRD/$TARBALL" -C "$work" "$lib_member" "$hdr_dir"
 
-rm -rf "$DEST"
+rm -rf "$DEST/lib" "$DEST/include" "$STAMP"
 mkdir -p "$DEST/lib" "$DEST/include"
 cp "$work/$lib_member" "$DEST/lib/libonnxruntime.so"
 # The C API header and the headers it includes (transitively) from the same folder.

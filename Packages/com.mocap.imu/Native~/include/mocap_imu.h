@@ -27,7 +27,10 @@
 extern "C" {
 #endif
 
-#if defined(_WIN32)
+#if defined(_WIN32) && defined(MOCAP_STATIC)
+/* Linked statically into the program (mocapctl, the tests): no DLL import thunks. */
+#  define MOCAP_API
+#elif defined(_WIN32)
 #  if defined(MOCAP_BUILDING_LIBRARY)
 #    define MOCAP_API __declspec(dllexport)
 #  else

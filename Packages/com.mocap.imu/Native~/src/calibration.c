@@ -654,7 +654,8 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
                      (unsigned long long)mocap_atomic_add_u64(&save_counter, 1));
     if (n < 0 || (size_t)n >= sizeof tmp)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save: path is too long");
-    FILE *f = mocap_fopen(tmp, "w");
+    /* Binary: the same bytes ('\n' line ends) on every OS, so a file moves between them. */
+    FILE *f = mocap_fopen(tmp, "wb");
     if (!f)
         return open_failure(tmp, "create", errno);
     int ok = fprintf(f, "%s %d\n", CALIB_FILE_HEADER, CALIB_FILE_VERSION) > 0;

@@ -79,22 +79,8 @@ static int64_t get_i64(const uint8_t *p)
 
 static int file_open(const char *path, int writing)
 {
-#if defined(_WIN32)
-    /* Paths are UTF-8: the narrow _open would read them in the ANSI code page. */
-    wchar_t wide[MOCAP_PATH_MAX];
-    if (mocap_utf8_to_wide(path, wide, MOCAP_PATH_MAX) != 0) return -1;
-    if (writing)
-        return _wopen(wide, _O_WRONLY | _O_CREAT | _O_TRUNC | _O_BINARY | _O_NOINHERIT,
-                      _S_IREAD | _S_IWRITE);
-    return _wopen(wide, _O_RDONLY | _O_BINARY | _O_NOINHERIT);
-#else
-    int fd;
-    do {
-        fd = writing ? open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)
-                     : open(path, O_RDONLY | O_CLOEXEC);
-    } while (fd < 0 && errno == EINTR);
-    return fd;
-#endif
+    /* UTF-8 path; not inherited by started programs; binary on Windows. */
+    return mocap_open_descriptor(path, writing);
 }
 
 static int file_close(int fd)

@@ -39,12 +39,6 @@ mocap_status ort_generic_run(ort_generic *g)
 
 #include <onnxruntime_c_api.h>
 
-#if defined(_WIN32)
-#include <windows.h>
-#else
-#include <dlfcn.h>
-#endif
-
 #define MAX_RANK 8
 
 struct ort_generic {
@@ -69,13 +63,8 @@ static const OrtApi *engine_api(void)
     if (!lib || !lib[0]) return NULL;
     typedef const OrtApiBase *(ORT_API_CALL * get_base_fn)(void);
     get_base_fn get_base = NULL;
-#if defined(_WIN32)
-    HMODULE h = LoadLibraryA(lib);
-    if (h) get_base = (get_base_fn)(void *)GetProcAddress(h, "OrtGetApiBase");
-#else
-    void *h = dlopen(lib, RTLD_NOW | RTLD_LOCAL);
-    if (h) get_base = (get_base_fn)dlsym(h, "OrtGetApiBase");
-#endif
+    void *h = mocap_library_open(lib, NULL, 0);
+    if (h) get_base = (get_base_fn)mocap_library_symbol(h, "OrtGetApiBase");
     const OrtApiBase *base = get_base ? get_base() : NULL;
     return base ? base->GetApi(ORT_API_VERSION) : NULL;
 }

@@ -70,26 +70,6 @@ mocap_status ort_stream_run(ort_stream *s) { (void)s; return ORT_MISSING; }
 
 #include "onnxruntime_c_api.h"
 
-#if defined(_WIN32)
-#define WIN32_LEAN_AND_MEAN
-#include <windows.h>
-typedef HMODULE lib_handle;
-static lib_handle lib_open(const char *path) { return LoadLibraryA(path); }
-static void *lib_symbol(lib_handle h, const char *name) { return (void *)GetProcAddress(h, name); }
-static void lib_close(lib_handle h) { FreeLibrary(h); }
-static void lib_error(char *buf, size_t cap) { snprintf(buf, cap, "Windows error %lu", GetLastError()); }
-#else
-#include <dlfcn.h>
-typedef void *lib_handle;
-static lib_handle lib_open(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
-static void *lib_symbol(lib_handle h, const char *name) { return dlsym(h, name); }
-static void lib_close(lib_handle h) { dlclose(h); }
-static void lib_error(char *buf, size_t cap)
-{
-    const char *e = dlerror();
-    snprintf(buf, cap, "%s", e ? e : "unknown dlopen error");
-}
-#endif
 
 /* ONNX Runtime 1.29's CreateEnv leaks 14 bytes inside the library even after ReleaseEnv (a
  * ten-line dlopen + CreateEnv + ReleaseEnv program shows it under LeakSanitizer). Sanitizer builds
@@ -125,16 +105,13 @@ static void unlock_global(void) { mocap_atomic_store_int(&g_lock, 0); }
 /* Try one file: on success fills the globals. why receives the reason of a failure. */
 static int try_library(const char *path, char *why, size_t why_cap)
 {
-    lib_handle h = lib_open(path);
-    if (!h) {
-        lib_error(why, why_cap);
-        return 0;
-    }
+    void *h = mocap_library_open(path, why, why_cap);
+    if (!h) return 0;
     typedef const OrtApiBase *(ORT_API_CALL * get_base_fn)(void);
-    get_base_fn get_base = (get_base_fn)lib_symbol(h, "OrtGetApiBase");
+    get_base_fn get_base = (get_base_fn)mocap_library_symbol(h, "OrtGetApiBase");
     if (!get_base) {
         snprintf(why, why_cap, "%s has no OrtGetApiBase: not ONNX Runtime", path);
-        lib_close(h);
+        mocap_library_close(h);
         return 0;
     }
     const OrtApiBase *base = get_base();
@@ -144,7 +121,7 @@ static int try_library(const char *path, char *why, size_t why_cap)
         snprintf(why, why_cap,
                  "%s is ONNX Runtime %s, which lacks C API version %d (ONNX Runtime 1.%d or newer "
                  "is needed)", path, version, ORT_API_VERSION, ORT_API_VERSION);
-        lib_close(h);
+        mocap_library_close(h);
         return 0;
     }
     OrtEnv *env = NULL;
@@ -153,7 +130,7 @@ static int try_library(const char *path, char *why, size_t why_cap)
         snprintf(why, why_cap, "%s: creating the ONNX Runtime environment failed: %s", path,
                  api->GetErrorMessage(st));
         api->ReleaseStatus(st);
-        lib_close(h);
+        mocap_library_close(h);
         return 0;
     }
     g_api = api;

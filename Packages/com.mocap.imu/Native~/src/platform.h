@@ -72,6 +72,9 @@ void mocap_sleep_ms(int ms);
  * ANSI code page). NULL / nonzero with errno set on failure. mocap_fopen's files are not
  * inherited by programs the process starts (O_CLOEXEC; "N" on Windows). */
 FILE *mocap_fopen(const char *path, const char *mode);
+/* A file descriptor (binary, not inherited by started programs) for the capture files, which
+ * write raw descriptors: read-only, or write-only created/truncated. -1 with errno set. */
+int mocap_open_descriptor(const char *path, int for_writing);
 int mocap_remove_file(const char *path);
 /* Moves from over to in one step, replacing an existing to (rename(); MoveFileEx on Windows,
  * where rename() refuses to replace): at every moment one of the two files is complete.
@@ -85,6 +88,14 @@ int mocap_replace_target(const char *path, char *resolved, size_t resolved_cap);
 /* fflush, then ask the OS to put the file's data on the disk (fsync / _commit), so that a
  * rename that follows never exposes an empty file after a power loss. 0 or an errno value. */
 int mocap_flush_to_disk(FILE *f);
+/* Shared libraries by UTF-8 path (dlopen; LoadLibraryExW on Windows, where a path with a
+ * folder also finds the DLLs that library needs beside it, e.g. ONNX Runtime's
+ * onnxruntime_providers_shared.dll; a bare name is searched for the usual way). NULL on failure,
+ * with the system's reason in why. Loaded libraries are reference counted by the OS: opening
+ * one already loaded returns the same module. */
+void *mocap_library_open(const char *path, char *why, size_t why_cap);
+void *mocap_library_symbol(void *library, const char *name);
+void mocap_library_close(void *library);
 /* This process's id (for names that must not collide between processes). */
 unsigned long mocap_process_id(void);
 

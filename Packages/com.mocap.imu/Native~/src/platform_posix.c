@@ -7,6 +7,7 @@
 
 #include "error.h"
 
+#include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -154,7 +155,34 @@ FILE *mocap_fopen(const char *path, const char *mode)
     return f;
 }
 
+int mocap_open_descriptor(const char *path, int for_writing)
+{
+    int fd;
+    do {
+        fd = for_writing ? open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)
+                         : open(path, O_RDONLY | O_CLOEXEC);
+    } while (fd < 0 && errno == EINTR);
+    return fd;
+}
+
 int mocap_remove_file(const char *path) { return remove(path); }
+
+void *mocap_library_open(const char *path, char *why, size_t why_cap)
+{
+    void *library = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!library && why && why_cap) {
+        const char *e = dlerror();
+        snprintf(why, why_cap, "%s", e ? e : "unknown dlopen error");
+    }
+    return library;
+}
+
+void *mocap_library_symbol(void *library, const char *name) { return dlsym(library, name); }
+
+void mocap_library_close(void *library)
+{
+    if (library) (void)dlclose(library);
+}
 
 int mocap_replace_target(const char *path, char *resolved, size_t resolved_cap)
 {

@@ -205,6 +205,57 @@ int mocap_replace_target(const char *path, char *resolved, size_t resolved_cap)
     return 0;
 }
 
+int mocap_open_descriptor(const char *path, int for_writing)
+{
+    wchar_t wpath[WIDE_PATH_MAX];
+    if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0) return -1;
+    if (for_writing)
+        return _wopen(wpath, _O_WRONLY | _O_CREAT | _O_TRUNC | _O_BINARY | _O_NOINHERIT,
+                      _S_IREAD | _S_IWRITE);
+    return _wopen(wpath, _O_RDONLY | _O_BINARY | _O_NOINHERIT);
+}
+
+void *mocap_library_open(const char *path, char *why, size_t why_cap)
+{
+    wchar_t wpath[WIDE_PATH_MAX];
+    if (mocap_utf8_to_wide(path, wpath, WIDE_PATH_MAX) != 0) {
+        if (why && why_cap) snprintf(why, why_cap, "%s: not a valid UTF-8 path", path);
+        return NULL;
+    }
+    /* With a folder in the path, the DLL's own folder is searched for its dependencies; the
+     * flags need an absolute path, so a relative one falls back to the standard search. */
+    int has_folder = wcspbrk(wpath, L"\\/") != NULL;
+    DWORD flags = has_folder ? LOAD_LIBRARY_SEARCH_DLL_LOAD_DIR | LOAD_LIBRARY_SEARCH_DEFAULT_DIRS : 0;
+    wchar_t full[WIDE_PATH_MAX];
+    const wchar_t *name = wpath;
+    if (has_folder) {
+        DWORD n = GetFullPathNameW(wpath, WIDE_PATH_MAX, full, NULL);
+        if (n > 0 && n < WIDE_PATH_MAX) name = full;
+    }
+    HMODULE library = LoadLibraryExW(name, NULL, flags);
+    if (!library && why && why_cap) {
+        DWORD code = GetLastError();
+        char text[256] = "";
+        DWORD len = FormatMessageA(FORMAT_MESSAGE_FROM_SYSTEM | FORMAT_MESSAGE_IGNORE_INSERTS, NULL,
+                                   code, 0, text, (DWORD)sizeof text, NULL);
+        while (len > 0 && (text[len - 1] == '\n' || text[len - 1] == '\r' || text[len - 1] == ' '))
+            text[--len] = '\0';
+        snprintf(why, why_cap, "%s: Windows error %lu%s%s", path, (unsigned long)code,
+                 len ? ": " : "", text);
+    }
+    return (void *)library;
+}
+
+void *mocap_library_symbol(void *library, const char *name)
+{
+    return (void *)(intptr_t)GetProcAddress((HMODULE)library, name);
+}
+
+void mocap_library_close(void *library)
+{
+    if (library) (void)FreeLibrary((HMODULE)library);
+}
+
 int mocap_remove_file(const char *path)
 {
     wchar_t wpath[WIDE_PATH_MAX];
@@ -224,8 +275,17 @@ int mocap_replace_file(const char *from, const char *to)
 {
     wchar_t wfrom[WIDE_PATH_MAX], wto[WIDE_PATH_MAX];
     if (mocap_utf8_to_wide(from, wfrom, WIDE_PATH_MAX) != 0 || mocap_utf8_to_wide(to, wto, WIDE_PATH_MAX) != 0) return errno;
-    if (MoveFileExW(wfrom, wto, MOVEFILE_REPLACE_EXISTING | MOVEFILE_WRITE_THROUGH)) return 0;
-    switch (GetLastError()) {
+    /* Two replacements of one file at once (saves from two threads) make one of them fail for a
+     * moment with a sharing violation or access denied while the other holds the target: retry
+     * those for up to about a second, as a POSIX rename() would simply have succeeded. */
+    DWORD error = ERROR_SUCCESS;
+    for (int attempt = 0; attempt < 200; ++attempt) {
+        if (MoveFileExW(wfrom, wto, MOVEFILE_REPLACE_EXISTING | MOVEFILE_WRITE_THROUGH)) return 0;
+        error = GetLastError();
+        if (error != ERROR_ACCESS_DENIED && error != ERROR_SHARING_VIOLATION) break;
+        Sleep(attempt < 20 ? 0 : 5);
+    }
+    switch (error) {
     case ERROR_ACCESS_DENIED:
     case ERROR_SHARING_VIOLATION: return EACCES;
     case ERROR_FILE_NOT_FOUND:

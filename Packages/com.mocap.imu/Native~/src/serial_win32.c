@@ -166,8 +166,12 @@ static void device_name(const char *path, char *out, size_t cap)
 static mocap_status open_port(serial_port *port)
 {
     char device[MOCAP_PATH_MAX + 8];
+    wchar_t wide_device[MOCAP_PATH_MAX + 8];
     device_name(port->path, device, sizeof device);
-    HANDLE h = CreateFileA(device, GENERIC_READ | GENERIC_WRITE, 0 /* exclusive */, NULL,
+    if (mocap_utf8_to_wide(device, wide_device, MOCAP_PATH_MAX + 8) != 0)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "serial port %s: not a valid UTF-8 name",
+                          port->path);
+    HANDLE h = CreateFileW(wide_device, GENERIC_READ | GENERIC_WRITE, 0 /* exclusive */, NULL,
                            OPEN_EXISTING, FILE_ATTRIBUTE_NORMAL, NULL);
     if (h == INVALID_HANDLE_VALUE) return open_error(port->path, GetLastError());
     if (GetFileType(h) != FILE_TYPE_CHAR) {

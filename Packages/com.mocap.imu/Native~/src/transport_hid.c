@@ -13,10 +13,12 @@
 mocap_status transport_open_hid(const char *path, uint16_t vendor_id, uint16_t product_id,
                                 transport **out)
 {
-    (void)path;
-    (void)vendor_id;
-    (void)product_id;
-    if (out) *out = NULL;
+    /* A bad selection is the caller's error in every build, so it is named as such here too. */
+    if (!out) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "HID device: NULL output pointer");
+    *out = NULL;
+    if (!(path && path[0]) && vendor_id == 0 && product_id == 0)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                          "HID device: give a device path or a vendor/product id");
     return mocap_fail(MOCAP_ERR_UNSUPPORTED,
                       "HID transport unavailable: the engine was built without hidapi");
 }

@@ -52,6 +52,8 @@ def main():
     ap.add_argument("--solver-dump", required=True)
     ap.add_argument("--workdir", required=True)
     ap.add_argument("--seconds", default="6")
+    ap.add_argument("--emulator", default="",
+                    help="runs the two programs (e.g. wine for a Windows build); empty: directly")
     args = ap.parse_args()
     try:
         import torch
@@ -75,11 +77,12 @@ def main():
     export_fp32(net, model, "golden tiny (random, seed 1234)")
 
     capture = work / "fixture.cap"
-    subprocess.run([args.mocapctl, "synth", "--out", str(capture), "--motion", "mixed", "--seconds",
+    emulator = [args.emulator] if args.emulator else []
+    subprocess.run(emulator + [args.mocapctl, "synth", "--out", str(capture), "--motion", "mixed", "--seconds",
                     args.seconds, "--noise", "realistic", "--seed", "5"], check=True,
                    stdout=subprocess.DEVNULL)
     dump = work / "poses.bin"
-    subprocess.run([args.solver_dump, str(model), str(capture), str(dump)], check=True)
+    subprocess.run(emulator + [args.solver_dump, str(model), str(capture), str(dump)], check=True)
 
     raw = dump.read_bytes()
     assert raw[:8] == b"MCPSDUMP", "bad dump magic"

@@ -10,12 +10,19 @@
 #include <array>
 #include <cstdlib>
 
+#if defined(_WIN32)
+#include <process.h>
+#define getpid _getpid
+#define popen _popen
+#define pclose _pclose
+#else
 #include <csignal>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <dirent.h>
 #include <fcntl.h>
+#endif
 
 #include <algorithm>
 #include <set>
@@ -84,7 +91,11 @@ CommandResult run_shell(const std::string &cmd)
     size_t n;
     while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
     int status = pclose(p);
+#if defined(_WIN32)
+    r.exit_code = status; // _pclose returns the command's exit code
+#else
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+#endif
     return r;
 }
 
@@ -95,10 +106,17 @@ std::string python_with_numpy()
     candidates.push_back("/usr/bin/python3");
     candidates.push_back("python3");
     for (const auto &p : candidates)
+#if defined(_WIN32)
+        if (std::system(("\"" + p + "\" -c \"import numpy\" >NUL 2>&1").c_str()) == 0) return p;
+#else
         if (std::system(("\"" + p + "\" -c \"import numpy\" >/dev/null 2>&1").c_str()) == 0) return p;
+#endif
     return "";
 }
 
+#if !defined(_WIN32)
+// POSIX only (fork, RLIMIT_FSIZE, /proc/self/fd): the suites that use these are not built for
+// Windows (tests/CMakeLists.txt says why).
 int exit_code_with_file_size_limit(uint64_t max_file_bytes, const std::function<int()> &child)
 {
     pid_t pid = fork();
@@ -142,3 +160,4 @@ OpenedDescriptors descriptors_opened_by(const std::function<void()> &action)
     }
     return out;
 }
+#endif

@@ -22,6 +22,7 @@ CommandResult run_shell(const std::string &cmd);
 // A Python that imports numpy: $MOCAP_PYTHON, /usr/bin/python3, then python3 on PATH; "" if none.
 std::string python_with_numpy();
 
+#if !defined(_WIN32)
 // Runs child in a forked process whose files may not grow past max_file_bytes (writes beyond
 // fail with EFBIG, as on a full disk; SIGXFSZ ignored) and returns its return value as the exit
 // code, or -1 when the fork or the limit failed or the child died. The child must not use gtest
@@ -35,3 +36,4 @@ struct OpenedDescriptors {
     std::vector<int> inheritable;
 };
 OpenedDescriptors descriptors_opened_by(const std::function<void()> &action);
+#endif

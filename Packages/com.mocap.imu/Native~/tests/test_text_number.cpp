@@ -35,6 +35,12 @@ struct CommaLocale {
 
     void enter()
     {
+#if defined(_WIN32)
+        // Windows has German built in (a name msvcrt and the UCRT both accept).
+        const char *current = std::setlocale(LC_NUMERIC, nullptr);
+        previous = current ? current : "C";
+        active = std::setlocale(LC_NUMERIC, "German_Germany.1252") != nullptr;
+#else
         const std::string dir = test_temp_dir() + "/locales";
         std::filesystem::create_directories(dir);
         const std::string cmd = "localedef -i de_DE -f UTF-8 \"" + dir + "/de_DE.UTF-8\" >/dev/null 2>&1";
@@ -43,6 +49,7 @@ struct CommaLocale {
         const char *now = std::setlocale(LC_NUMERIC, nullptr);
         previous = now ? now : "C";
         active = std::setlocale(LC_NUMERIC, "de_DE.UTF-8") != nullptr;
+#endif
     }
     ~CommaLocale()
     {
