@@ -17,7 +17,8 @@ reasons behind the numbers on stderr. The numbers are honest ones:
   - results that cannot be read, and a run that executed no test (or compiled no unit), are
     one failure, so a check that silently ran on nothing cannot look green.
 The allow-list holds lines "suite glob (any case) | test name regex (whole name) | why the skip
-is fine".
+is fine [| regex the runner's skip message must contain]"; the last field keeps an allowed test
+from also skipping for another reason (ctest reports no message: leave it out there).
 """
 import argparse
 import fnmatch
@@ -46,6 +47,7 @@ class AllowedSkip:
     name_pattern: re.Pattern
     reason: str
     line: int
+    message_pattern: re.Pattern = None
 
 
 def read_allow_list(path):
@@ -55,20 +57,23 @@ def read_allow_list(path):
         if not text or text.startswith("#"):
             continue
         parts = [p.strip() for p in text.split("|")]
-        if len(parts) != 3 or not all(parts):
-            raise ResultsError(f"{path}:{number}: expected 'suite glob | test name regex | reason', "
-                               f"got {raw!r}")
+        if len(parts) not in (3, 4) or not all(parts):
+            raise ResultsError(f"{path}:{number}: expected 'suite glob | test name regex | reason "
+                               f"[| skip message regex]', got {raw!r}")
         try:
-            pattern = re.compile(parts[1])
+            patterns = [re.compile(p) for p in [parts[1]] + parts[3:]]
         except re.error as e:
-            raise ResultsError(f"{path}:{number}: bad test name regex {parts[1]!r}: {e}") from e
-        entries.append(AllowedSkip(parts[0], pattern, parts[2], number))
+            raise ResultsError(f"{path}:{number}: bad regex: {e}") from e
+        entries.append(AllowedSkip(parts[0], patterns[0], parts[2], number,
+                                   patterns[1] if len(patterns) > 1 else None))
     return entries
 
 
-def find_allowance(entries, suite, name):
+def find_allowance(entries, suite, name, message=""):
     for entry in entries:
-        if fnmatch.fnmatchcase(suite.lower(), entry.suite_glob.lower()) and entry.name_pattern.fullmatch(name):
+        if (fnmatch.fnmatchcase(suite.lower(), entry.suite_glob.lower())
+                and entry.name_pattern.fullmatch(name)
+                and (entry.message_pattern is None or entry.message_pattern.search(message))):
             return entry
     return None
 
@@ -172,7 +177,7 @@ def tests_line(suite, results, allow_entries, log):
     failed = results.failed
     skipped = 0
     for name, reason in results.skipped:
-        entry = find_allowance(allow_entries, suite, name)
+        entry = find_allowance(allow_entries, suite, name, reason)
         if entry:
             skipped += 1
             log(f"  skipped, allowed ({entry.reason}): {name}")

@@ -62,6 +62,16 @@ def test_allow_list_matches_the_whole_name_and_the_suite(tmp_path):
     assert out == "1 2 0"
 
 
+def test_an_allowed_test_skipping_for_another_reason_fails(tmp_path):
+    allow = ("python* | training\\.tests\\.test_ort\\.test_run_onnx | a runtime with CUDA has nothing "
+             "to refuse | has CUDA\n")
+    out, err = run(tmp_path, "pytest", JUNIT, suite="python (training)", allow=allow)
+    assert out == "1 4 0", "the skip message 'ONNX Runtime not fetched' is not the allowed one"
+    allow = allow.replace("has CUDA", "not fetched")
+    out, err = run(tmp_path, "pytest", JUNIT, suite="python (training)", allow=allow)
+    assert out == "1 3 1"
+
+
 def test_ctest_no_tests_found_and_no_summary_are_failures(tmp_path):
     out, err = run(tmp_path, "ctest", "Test project /x\nNo tests were found!!!\n")
     assert out == "0 1 0" and "executed no test" in err
