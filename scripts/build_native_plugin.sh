@@ -18,6 +18,8 @@
 #               installs with "Add package from tarball" (the package with its plugin)
 #   --host-toolchain  compile with this machine's compiler instead of in the glibc 2.31 root (no
 #               root needed); the glibc check then passes only on a machine with glibc <= 2.31
+#   --windows   build the Windows x86_64 plugin instead (Runtime/Plugins/Windows/x86_64/
+#               mocap_imu.dll, MinGW-w64, smoke-tested under Wine): scripts/build_windows_plugin.sh
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -31,10 +33,11 @@ pack=0
 host_toolchain=0
 for arg in "$@"; do
   case "$arg" in
+    --windows) exec "$ROOT/scripts/build_windows_plugin.sh" ;;
     --with-hid) with_hid=ON ;;
     --pack) pack=1 ;;
     --host-toolchain) host_toolchain=1 ;;
-    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
     *) echo "build_native_plugin: unknown option $arg" >&2; exit 2 ;;
   esac
 done

@@ -14,6 +14,8 @@ PACKAGES=(
   libopenblas0-pthread               # torch on the CPU is ~10x slower with the reference BLAS
   liblo-tools                        # oscdump: a real OSC receiver for interop tests
   gcc-mingw-w64-x86-64-win32         # checks that the engine compiles for Windows
+  gcc-mingw-w64-x86-64-posix g++-mingw-w64-x86-64-posix   # the Windows build (GoogleTest needs std::mutex)
+  wine wine64                        # runs the Windows build's tests (scripts/test_windows.sh)
   debootstrap binutils               # the Linux plugin built and smoke-loaded on glibc 2.31, objdump
 )
 
