@@ -42,7 +42,7 @@ for d in $imports; do
 done
 # The export table: "[ordinal] name" lines after "[Ordinal/Name Pointer] Table".
 exports="$($MINGW-objdump -p "$dll" | sed -n '/\[Ordinal\/Name Pointer\] Table/,/^$/p' \
-           | awk '/^\s*\[/ && NF >= 2 {print $NF}' | grep -v 'Table$' || true)"
+           | awk '/^[ \t]*\[/ && NF >= 2 {print $NF}' | grep -v 'Table$' || true)"
 n_exports="$(grep -c '^mocap_' <<<"$exports" || true)"
 others="$(grep -v '^mocap_' <<<"$exports" || true)"
 [ "$n_exports" -gt 0 ] || die "mocap_imu.dll exports no mocap_ function"
