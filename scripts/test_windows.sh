@@ -39,6 +39,7 @@ done
 
 started=$(date +%s)
 mkdir -p "$BUILD"
+rm -f "$LOG" # a failed build must not leave the last run's results to be read
 say "configure + build (MinGW-w64) in $BUILD"
 if ! cmake -S "$NATIVE" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
      -DCMAKE_TOOLCHAIN_FILE="$NATIVE/cmake/mingw-w64-x86_64.cmake" >"$BUILD.configure.log" 2>&1; then
