@@ -192,7 +192,7 @@ TEST(CaptureFile, RoundTripOfThousandsOfRandomRecords)
     EXPECT_GE(res.chunks, payload / CAPTURE_CHUNK_CAPACITY + 1);
 }
 
-#if !defined(_WIN32)
+#if !defined(_WIN32) // Windows: reads /proc/self/fd
 TEST(CaptureFile, FilesAreNotInheritedByStartedPrograms)
 {
     const std::string path = test_temp_path("inherit.mcap");
@@ -302,7 +302,7 @@ TEST(CaptureFile, PollWritesAChunkOnceTheOldestRecordIs100msOld)
     EXPECT_EQ(capture_writer_close(w), MOCAP_OK);
 }
 
-#if !defined(_WIN32)
+#if !defined(_WIN32) // Windows: kills a forked writer
 namespace {
 
 // Record i of the crash test: deterministic length and bytes, so the parent can check them.
@@ -614,7 +614,7 @@ TEST(CaptureFile, HeaderKeepsSourceDescriptionAndCreationTime)
     capture_reader_close(r);
 }
 
-#if !defined(_WIN32)
+#if !defined(_WIN32) // Windows: /dev/full, and fork + RLIMIT_FSIZE for a full disk
 TEST(CaptureFile, FullDiskIsReportedWithTheFileAndTheCause)
 {
     if (access("/dev/full", W_OK) != 0) GTEST_SKIP() << "no writable /dev/full";
