@@ -8,6 +8,7 @@
 
 using System;
 using System.Collections;
+using System.IO;
 using System.Reflection;
 using Mocap.Imu.Recording;
 using UnityEditor;
@@ -210,7 +211,13 @@ namespace Mocap.Imu.Editor
                 // Every solved pose, not the newest per rendered frame: a 30 fps editor would keep
                 // half of a 60 Hz model's poses, and the take's BVH (fixed 1/rate frame time) would
                 // play twice as fast as the clip.
-                var recorder = new TakeRecorder(avatar, null, take);
+                // The latest pose per frame names the model frame the avatar shows (the Humanoid
+                // and Generic clips' key); the take's PoseTake ignores the repeat.
+                TakeRecorder.PoseSource shown = (out MocapPose pose) =>
+                    MocapComponentBridge.TryGetLatestPose(component, character, out pose);
+                var recorder = new TakeRecorder(avatar, shown, take);
+                var sessionComponent = typed;
+                recorder.Ended += () => _lastTakeSource = (sessionComponent, character);
                 MocapSessionComponent.PoseHandler keep = (int c, in MocapPose pose) =>
                 {
                     if (c == character && recorder.IsRecording) take.Add(pose);
@@ -224,13 +231,39 @@ namespace Mocap.Imu.Editor
             new TakeRecorder(avatar, source, take);
         }
 
+        // The session and character of the take that ended last, whose capture and calibration are kept.
+        static (MocapSessionComponent Component, int Character) _lastTakeSource;
+
         static void StopTake(TakeRecorder recorder)
         {
+            _lastTakeSource = (null, 0);
             var result = recorder.Stop();
             if (result.PosesPath != null) _lastPosesPath = result.PosesPath;
+            KeepCaptureAndCalibration(result);
+            if (result.MissingFrames > 0)
+                Debug.LogWarning($"Mocap take: {result.MissingFrames} model frames were never shown by the editor and have no key " +
+                                 "(the editor ran slower than the model); the clip interpolates across them.");
             Debug.Log($"Mocap take saved: {result.ClipPath} ({result.Frames} frames, {result.Clip.length:0.00} s)" +
                       (result.PosesPath != null ? $", poses {result.PosesPath}" : ""));
             if (result.Clip) EditorGUIUtility.PingObject(result.Clip);
+        }
+
+        static void KeepCaptureAndCalibration(TakeResult result)
+        {
+            var (component, character) = _lastTakeSource;
+            if (result.Files == null || component == null) return;
+            string project = Path.GetDirectoryName(Application.dataPath);
+            try
+            {
+                string capture = component.GetRecordingPath(character);
+                if (!string.IsNullOrEmpty(capture) && File.Exists(capture)) result.Files.KeepCapture(capture, project);
+                component.SaveCalibration(character, TakeFiles.Absolute(result.Files.Calibration, project));
+            }
+            catch (Exception e) when (e is MocapException || e is InvalidOperationException)
+            {
+                Debug.LogWarning($"Mocap take: the raw capture or calibration was not kept beside {result.ClipPath}: {e.Message}");
+            }
+            AssetDatabase.Refresh();
         }
 
         /// <summary>The hotkey: stop any take, else record the selected (or first) MocapSessionComponent's character 0.</summary>

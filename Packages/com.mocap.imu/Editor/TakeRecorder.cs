@@ -1,9 +1,11 @@
-// Records a driven avatar to an AnimationClip in the editor (UnityEditor.Animations.GameObjectRecorder:
-// every Transform under the root, one snapshot per frame), and the solved poses to a core PoseTake
-// so the take can be exported to BVH: every pose at the model's rate when the inspector feeds it
-// from MocapSessionComponent.PoseSolved, else the pose of each snapshot (PoseSource). Thin:
-// naming, pose bookkeeping and BVH live in the engine-free core (Recording/PoseTake.cs,
-// BvhExporter.cs).
+// Records a driven avatar in the editor. With a pose source and a model rate (a PoseTake), each new
+// solved pose the avatar shows is sampled into the core's HumanoidTake (HumanoidTakeSampler): a
+// Humanoid clip (RootT/RootQ and muscles through HumanPoseHandler, plays on any Humanoid avatar)
+// and a Generic clip (every bone), both keyed exactly at the model's frame clock with no key
+// reduction unless one is asked for. Without them, UnityEditor.Animations.GameObjectRecorder takes
+// one snapshot per rendered frame as before. The solved poses go to a core PoseTake for BVH export.
+// Thin: naming, timing, curves and pose bookkeeping live in the engine-free core
+// (Recording/HumanoidTake.cs, TakeFiles.cs, PoseTake.cs, BvhExporter.cs).
 //
 // In Play Mode a snapshot is taken once per player frame after LateUpdate (a PlayerLoop system
 // appended to PostLateUpdate), so the clip sees exactly the pose the driver applied that frame.
@@ -24,10 +26,18 @@ namespace Mocap.Imu.Editor
     /// <summary>What a finished take produced.</summary>
     public sealed class TakeResult
     {
-        /// <summary>The clip (an asset when <see cref="ClipPath"/> is set).</summary>
+        /// <summary>The main clip: the Humanoid one when the avatar is Humanoid, else the Generic one.</summary>
         public AnimationClip Clip;
         /// <summary>"Assets/Mocap Takes/Take ... .anim", or null when not saved.</summary>
         public string ClipPath;
+        /// <summary>The Generic clip beside a Humanoid one (null when <see cref="Clip"/> is the Generic clip).</summary>
+        public AnimationClip GenericClip;
+        /// <summary>Its path, or null.</summary>
+        public string GenericClipPath;
+        /// <summary>Every file name of the take (capture and calibration go beside the clips), or null when not saved.</summary>
+        public TakeFiles Files;
+        /// <summary>Model frames between the first and last key that the editor never showed (0: every pose is a key).</summary>
+        public long MissingFrames;
         /// <summary>The take's solved poses (null when no pose source was given).</summary>
         public PoseRecording Poses;
         /// <summary>The ".mcpose" next to the clip, or null.</summary>
@@ -45,6 +55,7 @@ namespace Mocap.Imu.Editor
         static readonly List<TakeRecorder> Active = new List<TakeRecorder>();
 
         GameObjectRecorder _recorder;
+        HumanoidTakeSampler _sampler;
         readonly PoseSource _poses;
         readonly PoseTake _take;
         bool _first = true;
@@ -62,6 +73,7 @@ namespace Mocap.Imu.Editor
             _take = take;
             _recorder = new GameObjectRecorder(root);
             _recorder.BindComponentsOfType<Transform>(root, true);
+            if (poses != null && take != null) _sampler = new HumanoidTakeSampler(root, take.FrameRate);
             ManualCapture = manualCapture;
             StartedAt = DateTime.Now;
             Active.Add(this);
@@ -82,6 +94,8 @@ namespace Mocap.Imu.Editor
         public bool IsRecording => _recorder != null;
         /// <summary>Poses kept so far.</summary>
         public int PoseCount => _take?.Count ?? 0;
+        /// <summary>Key reduction of the saved clips: none by default (every model frame a key).</summary>
+        public KeyReduction Reduction { get; set; } = KeyReduction.None;
 
         /// <summary>Raised once when the take stops, saved or not (listeners unsubscribe here).</summary>
         public event Action Ended;
@@ -103,7 +117,12 @@ namespace Mocap.Imu.Editor
             _recorder.TakeSnapshot(_first ? 0f : Mathf.Max(0f, deltaTime));
             _first = false;
             Frames++;
-            if (_take != null && _poses != null && _poses(out var pose)) _take.Add(pose);
+            if (_poses != null && _poses(out var pose))
+            {
+                // The avatar shows this pose now: one sample per new model frame (repeats are ignored).
+                _sampler?.Sample(pose.Sequence);
+                _take?.Add(pose);
+            }
         }
 
         /// <summary>
@@ -119,21 +138,44 @@ namespace Mocap.Imu.Editor
             RaiseEnded();
             var result = new TakeResult { Frames = Frames };
             var name = TakeNaming.TakeName(StartedAt, prefix ?? (Root ? Root.name : null));
-            var clip = new AnimationClip { name = name };
-            if (Frames > 0) _recorder.SaveToClip(clip);
+            AnimationClip humanoid = null, generic;
+            if (_sampler != null && _sampler.Take.Count > 0)
+            {
+                humanoid = _sampler.HumanoidClip(name, Reduction);
+                generic = _sampler.GenericClip(name + TakeFiles.GenericSuffix, Reduction);
+                result.MissingFrames = _sampler.Take.MissingFrames;
+            }
+            else
+            {
+                generic = new AnimationClip { name = name };
+                if (Frames > 0) _recorder.SaveToClip(generic);
+            }
             ReleaseRecorder();
-            result.Clip = clip;
+            result.Clip = humanoid ? humanoid : generic;
+            result.GenericClip = humanoid ? generic : null;
             if (_take != null && _take.Count > 0) result.Poses = _take.ToRecording();
             if (folder == null) return result;
 
             EnsureFolder(folder);
-            result.ClipPath = TakeNaming.UniquePath(folder, name, ".anim",
-                p => AssetDatabase.LoadMainAssetAtPath(p) != null || File.Exists(p));
-            clip.name = Path.GetFileNameWithoutExtension(result.ClipPath);
-            AssetDatabase.CreateAsset(clip, result.ClipPath);
+            result.Files = TakeFiles.Reserve(folder, name, p => AssetDatabase.LoadMainAssetAtPath(p) != null || File.Exists(p));
+            if (humanoid)
+            {
+                result.ClipPath = result.Files.HumanoidClip;
+                result.GenericClipPath = result.Files.GenericClip;
+                humanoid.name = Path.GetFileNameWithoutExtension(result.ClipPath);
+                generic.name = Path.GetFileNameWithoutExtension(result.GenericClipPath);
+                AssetDatabase.CreateAsset(humanoid, result.ClipPath);
+                AssetDatabase.CreateAsset(generic, result.GenericClipPath);
+            }
+            else
+            {
+                result.ClipPath = result.Files.GenericClip;
+                generic.name = Path.GetFileNameWithoutExtension(result.ClipPath);
+                AssetDatabase.CreateAsset(generic, result.ClipPath);
+            }
             if (result.Poses != null)
             {
-                result.PosesPath = TakeNaming.PosePathFor(result.ClipPath);
+                result.PosesPath = result.Files.Poses;
                 result.Poses.Save(Path.GetFullPath(result.PosesPath));
                 AssetDatabase.ImportAsset(result.PosesPath);
             }
@@ -157,6 +199,8 @@ namespace Mocap.Imu.Editor
             _recorder.ResetRecording();
             UnityEngine.Object.DestroyImmediate(_recorder);
             _recorder = null;
+            _sampler?.Dispose();
+            _sampler = null;
         }
 
         void RaiseEnded()

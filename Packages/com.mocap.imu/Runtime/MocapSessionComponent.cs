@@ -205,7 +205,7 @@ namespace Mocap.Imu
                 int n = settings.characters.Count;
                 request = new OpenRequest
                 {
-                    ModelPath = MocapSettings.ResolvePath(settings.modelPath),
+                    ModelPath = settings.ResolveModelPath(),
                     ModelOptions = settings.ToModelOptions(),
                     SolverConfig = settings.ToSolverConfig(),
                     Sources = settings.characters.ToArray(),

@@ -15,7 +15,7 @@ namespace Mocap.Imu
         [Tooltip("Serial port, HID receiver, or a raw capture file played back (no sensors needed).")]
         public MocapSourceKind source = MocapSourceKind.Serial;
 
-        [Tooltip("Serial: the port (\"COM3\", \"/dev/ttyUSB0\"). HID: a hidraw path, or empty to use vendor/product id.")]
+        [Tooltip("Serial: the port (\"COM3\", \"/dev/ttyUSB0\", \"/dev/cu.usbserial-0001\"). HID: a hidraw path, or empty to use vendor/product id.")]
         public string port = SerialPortDefaults.DefaultPort(PlayerPaths.CurrentOs());
 
         [Tooltip("Serial baud rate.")]
@@ -96,7 +96,7 @@ namespace Mocap.Imu
     public sealed class MocapSettings : ScriptableObject
     {
         [Header("Pose model")]
-        [Tooltip("The .onnx pose model. Relative paths resolve against the project; in a player, a bare file name is looked up in StreamingAssets.")]
+        [Tooltip("The .onnx pose model. Relative paths resolve against the project; a player build ships it as StreamingAssets/com.mocap.imu/<file name>.")]
         public string modelPath = "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx";
 
         [Tooltip("Where the model runs: CPU (always available) or CUDA (needs a CUDA build of ONNX Runtime and a GPU; refused with a clear error otherwise).")]
@@ -133,26 +133,54 @@ namespace Mocap.Imu
         [Tooltip("Folder for recorded captures; relative to the project folder (editor) or persistentDataPath (player).")]
         public string recordingFolder = "Captures";
 
-        /// <summary>A relative path against the project folder (editor; Unity maps "Packages/...") or the player's data.</summary>
-        public static string ResolvePath(string path)
+        /// <summary>Where this editor or player runs, for the core's path rules (main thread: reads Application).</summary>
+        public static RunningContext CurrentContext()
         {
-            if (string.IsNullOrEmpty(path)) return string.Empty;
-            if (Path.IsPathRooted(path)) return path;
-            var full = Path.GetFullPath(path);
-            if (File.Exists(full) || Application.isEditor) return full;
-            var streaming = Path.Combine(Application.streamingAssetsPath, Path.GetFileName(path));
-            return File.Exists(streaming) ? streaming : full;
+            var os = PlayerPaths.CurrentOs();
+            var cpu = PlayerPaths.CurrentArchitecture();
+            var context = Application.isEditor
+                ? RunningContext.Editor(os, Path.GetDirectoryName(Application.dataPath), cpu)
+                : RunningContext.Player(os, Application.dataPath, cpu);
+            context.StreamingAssetsPath = Application.streamingAssetsPath;
+            context.PersistentDataPath = Application.persistentDataPath;
+            context.OnnxRuntimeOverride = Environment.GetEnvironmentVariable("MOCAP_ONNXRUNTIME_PATH");
+            if (Application.isEditor)
+            {
+                // Unity resolves "Packages/<name>" to the package's real folder (embedded, local or PackageCache).
+                context.PackageFolders["com.mocap.imu"] = Path.GetFullPath("Packages/com.mocap.imu");
+                context.PackageFolders[PlayerPaths.OnnxRuntimePackage] = Path.GetFullPath("Packages/" + PlayerPaths.OnnxRuntimePackage);
+            }
+            return context;
         }
 
+        /// <summary>
+        /// A data file the settings name (capture, calibration): the file found, else the first
+        /// place looked (the engine's error then names it). Empty stays empty.
+        /// </summary>
+        public static string ResolvePath(string path)
+        {
+            if (string.IsNullOrWhiteSpace(path)) return string.Empty;
+            var lookup = PlayerPaths.FindFile(CurrentContext(), path, "file");
+            return lookup.Found ? lookup.Path : lookup.Tried[0];
+        }
+
+        /// <summary>The pose model to open.</summary>
+        /// <exception cref="MocapException">NotFound, naming every path tried.</exception>
+        public string ResolveModelPath() => PlayerPaths.FindModel(CurrentContext(), modelPath).Require();
+
         /// <summary>Model options with the ONNX Runtime library of this platform (docs: "How the engine finds ONNX Runtime").</summary>
+        /// <exception cref="MocapException">NotFound: the ONNX Runtime path set here does not exist.</exception>
         public ModelOptions ToModelOptions()
         {
+            var lookup = PlayerPaths.FindOnnxRuntime(CurrentContext(), onnxRuntimePath);
+            if (!lookup.Found && !string.IsNullOrWhiteSpace(onnxRuntimePath)) lookup.Require();
+            if (!lookup.Found) Debug.LogWarning("Mocap: " + lookup.Error + "; the engine searches its own default places next.");
             return new ModelOptions
             {
                 ExecutionProvider = executionProvider,
                 IntraOpThreads = intraOpThreads,
                 CudaDevice = cudaDevice,
-                OnnxRuntimePath = string.IsNullOrEmpty(onnxRuntimePath) ? OnnxRuntimeLocator.Find() : ResolvePath(onnxRuntimePath),
+                OnnxRuntimePath = lookup.Found ? lookup.Path : string.Empty,
             };
         }
 
@@ -171,63 +199,21 @@ namespace Mocap.Imu
         }
 
         /// <summary>Where recordings go.</summary>
-        public string ResolveRecordingFolder()
-        {
-            if (Path.IsPathRooted(recordingFolder)) return recordingFolder;
-            return Application.isEditor
-                ? Path.GetFullPath(string.IsNullOrEmpty(recordingFolder) ? "Captures" : recordingFolder)
-                : Path.Combine(Application.persistentDataPath, recordingFolder);
-        }
+        public string ResolveRecordingFolder() => PlayerPaths.RecordingFolder(CurrentContext(), recordingFolder);
     }
 
     /// <summary>
     /// The ONNX Runtime library shipped by com.github.asus4.onnxruntime, for the engine's
     /// explicit path (the engine's own search does not look inside Unity packages or players).
-    /// Editor and player paths from Documentation~/index.md; the player paths are unverified.
+    /// The places per editor and player are the core's (PlayerPaths.FindOnnxRuntime).
     /// </summary>
     public static class OnnxRuntimeLocator
     {
-        /// <summary>The first candidate that exists, else "" (let the engine search; $MOCAP_ONNXRUNTIME_PATH wins there).</summary>
+        /// <summary>The first candidate that exists, else "" (let the engine search).</summary>
         public static string Find()
         {
-            if (!string.IsNullOrEmpty(Environment.GetEnvironmentVariable("MOCAP_ONNXRUNTIME_PATH"))) return string.Empty;
-            foreach (var candidate in Candidates())
-                if (File.Exists(candidate)) return candidate;
-            return string.Empty;
-        }
-
-        static IEnumerable<string> Candidates()
-        {
-            const string Pkg = "Packages/com.github.asus4.onnxruntime/Plugins/";
-            string data = Application.dataPath;
-            switch (Application.platform)
-            {
-                case RuntimePlatform.WindowsEditor:
-                    yield return Path.GetFullPath(Pkg + "Windows/x64/onnxruntime.dll");
-                    break;
-                case RuntimePlatform.OSXEditor:
-                    // The package ships Apple silicon only: an Intel editor cannot load it (set
-                    // onnxRuntimePath or MOCAP_ONNXRUNTIME_PATH to an x64 build there).
-                    if (System.Runtime.InteropServices.RuntimeInformation.ProcessArchitecture ==
-                        System.Runtime.InteropServices.Architecture.Arm64)
-                        yield return Path.GetFullPath(Pkg + "macOS/arm64/libonnxruntime.dylib");
-                    break;
-                case RuntimePlatform.LinuxEditor:
-                    yield return Path.GetFullPath(Pkg + "Linux/x64/libonnxruntime.so");
-                    break;
-                case RuntimePlatform.WindowsPlayer:
-                    yield return Path.Combine(data, "Plugins", "x86_64", "onnxruntime.dll");
-                    yield return Path.Combine(data, "Plugins", "onnxruntime.dll");
-                    break;
-                case RuntimePlatform.OSXPlayer:
-                    yield return Path.Combine(data, "PlugIns", "libonnxruntime.dylib");
-                    yield return Path.Combine(data, "Plugins", "libonnxruntime.dylib");
-                    break;
-                case RuntimePlatform.LinuxPlayer:
-                    yield return Path.Combine(data, "Plugins", "libonnxruntime.so");
-                    yield return Path.Combine(data, "Plugins", "x86_64", "libonnxruntime.so");
-                    break;
-            }
+            var lookup = PlayerPaths.FindOnnxRuntime(MocapSettings.CurrentContext());
+            return lookup.Found ? lookup.Path : string.Empty;
         }
     }
 }
