@@ -126,12 +126,26 @@ namespace Mocap.Imu.Tests
             string a = "title", b = "instruction", c = "Collecting: 10%";
             var first = Frame(panel, a, b, c);
             Assert.AreSame(first, Frame(panel, a, b, c));
-            long before = GC.GetAllocatedBytesForCurrentThread();
-            int length = 0;
-            for (int i = 0; i < 1000; i++) length += Frame(panel, a, b, c).Length;
-            long allocated = GC.GetAllocatedBytesForCurrentThread() - before;
-            Assert.AreEqual(1000 * first.Length, length);
+            Frames(panel, a, b, c, 100);  // warm-up: JIT the loop, the panel and the getter
+            // The least of three runs: a per-frame allocation shows in every run, while the
+            // runtime's own one-off work (tiering a method up mid-run) shows in one at most.
+            long allocated = long.MaxValue;
+            for (int run = 0; run < 3; run++)
+            {
+                long before = GC.GetAllocatedBytesForCurrentThread();
+                int length = Frames(panel, a, b, c, 1000);
+                long bytes = GC.GetAllocatedBytesForCurrentThread() - before;
+                Assert.AreEqual(1000 * first.Length, length);
+                allocated = Math.Min(allocated, bytes);
+            }
             Assert.AreEqual(0, allocated, "an unchanged panel must not allocate per frame");
+        }
+
+        static int Frames(PanelText panel, string a, string b, string c, int count)
+        {
+            int length = 0;
+            for (int i = 0; i < count; i++) length += Frame(panel, a, b, c).Length;
+            return length;
         }
 
         static string Frame(PanelText panel, string a, string b, string c)
