@@ -641,18 +641,16 @@ def test_the_real_package_declares_the_modules_it_uses():
     assert "com.unity.test-framework" in deps
 
 
-@pytest.mark.parametrize("module,user", [
-    ("physics", "Runtime/PhysicsCharacter.cs"),
-    ("animation", "Editor/MocapSessionComponentEditor.cs"),
-    ("imgui", "Editor/CalibrationWindow.cs"),
-    ("vr", "Samples~/VrAvatar/VrAvatarBootstrap.cs"),
-])
-def test_a_used_module_missing_from_the_dependencies_fails(pkg, module, user):
+@pytest.mark.parametrize("module", ["physics", "animation", "imgui", "vr"])
+def test_a_used_module_missing_from_the_dependencies_fails(pkg, module):
     dependencies(pkg, **{f"com__unity__modules__{module}": None})
     problems = lint(pkg)
-    assert problems_about(problems, "package.json", f"{user} uses")
     assert problems_about(problems, "package.json", f"com.unity.modules.{module}")
     assert len(problems) == 1, problems
+    # The problem names a file of the package that uses the module (the first one found).
+    named = re.search(r"package\.json: (\S+\.cs) uses", problems[0])
+    assert named, problems[0]
+    assert (pkg / named.group(1)).is_file(), problems[0]
 
 
 def test_a_declared_module_nothing_uses_fails(pkg):
