@@ -53,7 +53,7 @@ fi
 for binary in "$BUILD/mocap_imu.dll" "$BUILD/mocapctl.exe"; do
   dlls=$(x86_64-w64-mingw32-objdump -p "$binary" | awk '/DLL Name:/ {print $3}' | tr '\n' ' ')
   for dll in $dlls; do
-    case "${dll,,}" in kernel32.dll|msvcrt.dll|ws2_32.dll) ;;
+    case "${dll,,}" in kernel32.dll|msvcrt.dll|ws2_32.dll|shell32.dll) ;;
       *) die "$(basename "$binary") needs $dll (only Windows' own DLLs are allowed: link it statically)";; esac
   done
   say "$(basename "$binary") imports ${dlls% }"

@@ -92,7 +92,7 @@ static int write_u32(FILE *f, uint32_t v)
 static int bundle_read(const char *path, bundle *b)
 {
     memset(b, 0, sizeof *b);
-    FILE *f = fopen(path, "rb");
+    FILE *f = mocap_fopen(path, "rb");
     if (!f) {
         fprintf(stderr, "mocapctl: cannot open %s\n", path);
         return 1;
@@ -155,7 +155,7 @@ static tensor *bundle_find(bundle *b, const char *name)
 
 static int bundle_write(const char *path, const bundle *b)
 {
-    FILE *f = fopen(path, "wb");
+    FILE *f = mocap_fopen(path, "wb");
     if (!f) {
         fprintf(stderr, "mocapctl: cannot write %s\n", path);
         return 1;

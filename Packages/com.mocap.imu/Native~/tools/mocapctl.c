@@ -18,6 +18,10 @@
 #if defined(_WIN32)
 #include <direct.h>
 #include <io.h>
+#define WIN32_LEAN_AND_MEAN
+#define NOMINMAX
+#include <windows.h>
+#include <shellapi.h>
 #define isatty _isatty
 #define getcwd _getcwd
 #else
@@ -268,7 +272,7 @@ typedef struct truth_table {
 
 static int truth_load(const char *path, truth_table *table)
 {
-    FILE *f = fopen(path, "r");
+    FILE *f = mocap_fopen(path, "r");
     if (!f) {
         fprintf(stderr, "mocapctl: cannot open truth file %s\n", path);
         return -1;
@@ -597,7 +601,7 @@ static int cmd_replay(int argc, char **argv)
         st->have_truth = 1;
     }
     if (csv_path) {
-        st->csv = fopen(csv_path, "w");
+        st->csv = mocap_fopen(csv_path, "w");
         if (!st->csv) {
             fprintf(stderr, "mocapctl: cannot write %s\n", csv_path);
             goto done;
@@ -687,7 +691,7 @@ done:
 
 static int file_exists(const char *path)
 {
-    FILE *f = fopen(path, "rb");
+    FILE *f = mocap_fopen(path, "rb");
     if (!f) return 0;
     fclose(f);
     return 1;
@@ -762,7 +766,7 @@ typedef struct pose_truth {
 /* Columns of the first data line of a CSV (0 when none). */
 static int csv_first_row_columns(const char *path)
 {
-    FILE *f = fopen(path, "r");
+    FILE *f = mocap_fopen(path, "r");
     if (!f) return -1;
     static char line[16384];
     int cols = 0;
@@ -785,7 +789,7 @@ static int csv_first_row_columns(const char *path)
 static int pose_truth_load(const char *path, pose_truth *pt)
 {
     memset(pt, 0, sizeof *pt);
-    FILE *f = fopen(path, "r");
+    FILE *f = mocap_fopen(path, "r");
     if (!f) {
         fprintf(stderr, "mocapctl: cannot open truth file %s\n", path);
         return -1;
@@ -1033,7 +1037,7 @@ static void json_number(FILE *f, const char *key, double value, const char *afte
 /* The figures metrics_print shows, for scripts and tests (--metrics-json). 0 when written. */
 static int metrics_write_json(const pose_metrics *m, const char *truth_path, const char *path)
 {
-    FILE *f = fopen(path, "w");
+    FILE *f = mocap_fopen(path, "w");
     if (!f) {
         fprintf(stderr, "mocapctl: cannot write %s\n", path);
         return 1;
@@ -1136,7 +1140,7 @@ static int open_model(const char *model_arg, mocap_model **model, mocap_model_in
 
 static long file_size(const char *path)
 {
-    FILE *f = fopen(path, "rb");
+    FILE *f = mocap_fopen(path, "rb");
     if (!f) return -1;
     fseek(f, 0, SEEK_END);
     long n = ftell(f);
@@ -1232,12 +1236,12 @@ static int cmd_replay_pose(int argc, char **argv)
         }
         bvh_writer_set_flush_every(bvh, (uint32_t)(info.frame_rate > 1 ? info.frame_rate : 1));
     }
-    if (json_path && !(json = fopen(json_path, "w"))) {
+    if (json_path && !(json = mocap_fopen(json_path, "w"))) {
         fprintf(stderr, "mocapctl: cannot write %s\n", json_path);
         goto done;
     }
     if (csv_path) {
-        if (!(csv = fopen(csv_path, "w"))) {
+        if (!(csv = mocap_fopen(csv_path, "w"))) {
             fprintf(stderr, "mocapctl: cannot write %s\n", csv_path);
             goto done;
         }
@@ -1868,8 +1872,41 @@ static const char *options_of(const char *command)
     return NULL;
 }
 
+#if defined(_WIN32)
+/* The command line as UTF-8, the encoding of the engine's paths: main's argv is in the ANSI code
+ * page, where a file name outside it (say Japanese on a Western system) arrives as '?'. The
+ * strings live until the process exits. NULL when Windows cannot give the wide command line. */
+static char **utf8_arguments(int *argc)
+{
+    int n = 0;
+    wchar_t **wide = CommandLineToArgvW(GetCommandLineW(), &n);
+    if (!wide) return NULL;
+    char **out = calloc((size_t)n + 1, sizeof *out);
+    for (int i = 0; out && i < n; ++i) {
+        int bytes = WideCharToMultiByte(CP_UTF8, 0, wide[i], -1, NULL, 0, NULL, NULL);
+        if (bytes <= 0 || !(out[i] = malloc((size_t)bytes))) { out = NULL; break; }
+        WideCharToMultiByte(CP_UTF8, 0, wide[i], -1, out[i], bytes, NULL, NULL);
+    }
+    LocalFree(wide);
+    if (out) *argc = n;
+    return out;
+}
+#endif
+
 int main(int argc, char **argv)
 {
+#if defined(_WIN32)
+    {
+        char **utf8 = utf8_arguments(&argc);
+        if (!utf8) {
+            fprintf(stderr, "mocapctl: could not read the command line as Unicode\n");
+            return 2;
+        }
+        argv = utf8;
+        /* Paths and names print as UTF-8; a console shows them right in this code page. */
+        SetConsoleOutputCP(CP_UTF8);
+    }
+#endif
     if (argc < 2) return usage();
     signal(SIGINT, on_interrupt);
     const char *cmd = argv[1];
