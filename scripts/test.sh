@@ -4,7 +4,8 @@
 #   fuzz:         the HiPNUC decoder and the capture / calibration file readers under
 #                 libFuzzer for a bounded time
 #   windows:      the engine, mocapctl and the engine's tests built with MinGW-w64, the tests
-#                 run under Wine with the Windows ONNX Runtime DLL (scripts/test_windows.sh)
+#                 run under Wine with the Windows ONNX Runtime DLL (scripts/test_windows.sh);
+#                 the shipped Release DLL built and loaded under Wine (build_windows_plugin.sh)
 #   linux plugin: the plugin built in a glibc 2.31 root (scripts/build_native_plugin.sh), replayed
 #                 there and here, and no symbol newer than GLIBC_2.31 (scripts/check_glibc.sh)
 #   dotnet:       the C# core's NUnit tests against the real native library, and the Unity
@@ -170,6 +171,14 @@ if [ -s "$BUILD/windows.ctest.log" ]; then
   record_from "engine (windows, wine)" ctest "$BUILD/windows.ctest.log"
 else
   record "engine (windows, wine)" 0 1 0
+fi
+# The Windows plugin as it ships: Release DLL, only Windows' own imports, only mocap_* exports,
+# loaded under Wine and opening the shipped model.
+echo "=== Windows plugin: MinGW-w64 Release build, imports/exports, load under Wine"
+if "$ROOT/scripts/build_windows_plugin.sh" 2>&1 | tee "$BUILD/windows-plugin.log"; then
+  record "windows plugin (mingw-w64)" 1 0 0
+else
+  record "windows plugin (mingw-w64)" 0 1 0
 fi
 
 if [ -d "$ROOT/dotnet/Mocap.Imu.Core.Tests" ]; then
