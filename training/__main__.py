@@ -12,7 +12,7 @@ import sys
 
 COMMANDS = {
     "prepare": ("dataset", "extract the CMU archives and convert every clip into the cache"),
-    "pack": ("motion_pack", "pack retargeted clips into one small file, to train elsewhere"),
+    "pack": ("pack_command", "pack retargeted clips into one small file, to train elsewhere"),
     "train": ("train", "train the pose model (checkpoints in training/data/checkpoints)"),
     "average": ("average", "average the weights of checkpoints of one network (model soup)"),
     "export": ("export", "export ONNX fp32 + fp16 per docs/model-contract.md"),
@@ -56,7 +56,8 @@ def main(argv=None) -> int:
         print(f"training {args.command}: module training.{args._module} is not available ({m})",
               file=sys.stderr)
         return 2
-    from .cli import check_inputs, one_line
+    from .cli import check_inputs
+    from .errors import one_line
     try:
         check_inputs(args.command, args)
         return int(m.main(args) or 0)
@@ -67,11 +68,11 @@ def main(argv=None) -> int:
 
 
 def _expected_errors() -> tuple:
-    """The failures main reports as one line: bad user input (cli.UsageError), failed checks
-    (cli.CommandError), damaged BVH files, file-system errors and ONNX Runtime refusing a model.
+    """The failures main reports as one line: bad user input (errors.UsageError), failed checks
+    (errors.CommandError), damaged BVH files, file-system errors and ONNX Runtime refusing a model.
     Everything else is a bug and keeps its traceback."""
     from .bvh import BvhError
-    from .cli import CommandError
+    from .errors import CommandError
     errors = [CommandError, BvhError, OSError]
     try:
         from .ort import OnnxRuntimeError

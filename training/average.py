@@ -16,10 +16,10 @@ from pathlib import Path
 
 import torch
 
-from .cli import UsageError, same_file
+from .errors import UsageError
+from .files import atomic_torch_save, same_file
 from .model import ModelConfig
-from .train import (atomic_torch_save, checkpoint_model_config, load_checkpoint_file, require_finite_weights,
-                    require_pose_checkpoint)
+from .train import checkpoint_model_config, load_checkpoint_file, require_finite_weights, require_pose_checkpoint
 
 
 def average_state_dicts(states: list, weights: list | None = None) -> dict:

@@ -1,38 +1,13 @@
-"""Command-line plumbing shared by the subcommands: the errors `python3 -m training` prints as one
-line (`training <command>: <message>`, exit 1) instead of a traceback, and the early checks of the
-files and folders a command line names.
-
-Only expected failures are turned into messages (bad input, a failed check, a missing or unusable
-file, ONNX Runtime refusing a model); anything else is a bug and keeps its traceback.
-"""
+"""Command-line plumbing shared by the subcommands: argparse types for numbers and the early
+checks of the files and folders a command line names (a UsageError, errors.py, before the command
+runs)."""
 from __future__ import annotations
 
 import argparse
 import math
-import os
 from pathlib import Path
 
-
-class CommandError(Exception):
-    """An expected failure of a command (e.g. a failed export check): a message, not a bug."""
-
-
-class UsageError(CommandError, ValueError):
-    """Bad input from the user (a missing file, an empty folder, contradicting options)."""
-
-
-def one_line(err: BaseException) -> str:
-    text = str(err) or type(err).__name__
-    return "; ".join(s.strip() for s in text.splitlines() if s.strip())
-
-
-def same_file(a, b) -> bool:
-    """Both paths name one file: the same file where both exist (links, other spellings), else
-    the same resolved path (an output not written yet)."""
-    a, b = Path(a), Path(b)
-    if a.exists() and b.exists():
-        return os.path.samefile(a, b)
-    return os.path.realpath(a) == os.path.realpath(b)
+from .errors import UsageError
 
 
 def number_type(convert, accepts, expected: str):
@@ -62,28 +37,6 @@ def require_file(path, option: str) -> Path:
     if not p.is_file():
         raise UsageError(f"{option} {path}: not a file")
     return p
-
-
-def atomic_write_bytes(data, path, what: str) -> None:
-    """Write `data` (bytes-like) to a temporary file beside `path`, fsync, then os.replace: an
-    interrupted or failed write (disk full, Ctrl-C) leaves the previous file, never a truncated
-    one. A failed write is a CommandError naming `path` and `what` it was meant to hold."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())   # a full disk can show only here (delayed allocation)
-        os.replace(tmp, path)
-    except OSError as e:
-        tmp.unlink(missing_ok=True)
-        kept = "the previous file is kept" if path.exists() else "nothing written"
-        raise CommandError(f"{path}: cannot write the {what} ({e.strerror or e}); {kept}") from e
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def require_bvh_folder(path, option: str, pack_ok: bool = False) -> Path:

@@ -22,7 +22,6 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 import tempfile
 import time
 from collections import Counter
@@ -32,7 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
-from .cli import CommandError, UsageError
+from .errors import CommandError, UsageError
+from .progress import progress_bar
 
 REPO = Path(__file__).resolve().parents[1]
 DATA_DIR = REPO / "training" / "data"
@@ -256,16 +256,6 @@ def _convert(item):
     return clip, m.num_frames, m.num_frames / m.fps, c.frame_time, (m if keep else None)
 
 
-def _progress(it, total, desc, enabled):
-    if not enabled:
-        return it
-    try:
-        from tqdm import tqdm
-        return tqdm(it, total=total, desc=desc, unit="clip", file=sys.stderr)
-    except ImportError:
-        return it
-
-
 def _run(clips, cache, force, workers, progress, keep, cache_dir, desc):
     version = code_version()
     results = {}
@@ -280,12 +270,12 @@ def _run(clips, cache, force, workers, progress, keep, cache_dir, desc):
         workers = max(1, min(workers or os.cpu_count() or 1, len(todo)))
         if workers == 1:
             it = map(_convert, todo)
-            for r in _progress(it, len(todo), desc, progress):
+            for r in progress_bar(it, len(todo), desc, progress):
                 results[r[0]] = ("new", r)
         else:
             with ProcessPoolExecutor(workers) as ex:
                 it = ex.map(_convert, todo, chunksize=4)
-                for r in _progress(it, len(todo), desc, progress):
+                for r in progress_bar(it, len(todo), desc, progress):
                     results[r[0]] = ("new", r)
     return results
 

@@ -42,6 +42,7 @@ import numpy as np
 
 from . import skeleton as sk
 from .cli import NON_NEGATIVE_INT, POSITIVE_INT, number_type
+from .errors import CommandError, UsageError
 
 REPO = Path(__file__).resolve().parent.parent
 MODELS_DIR = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
@@ -69,7 +70,6 @@ def eval_augmentation(noise: str = "realistic"):
     separates what the sensor errors cost from what six sensors cannot observe."""
     from .synthesis import Augmentation
     if noise not in NOISE_CHOICES:
-        from .cli import UsageError
         raise UsageError(f"noise {noise!r}: expected one of {', '.join(NOISE_CHOICES)}")
     aug = Augmentation(scale=(1.0, 1.0), heading=False, mirror=0.0, speed=(1.0, 1.0))
     if noise == "none":
@@ -183,7 +183,6 @@ def load_torch_model(path, mirror: bool = False):
     import torch
     from .model import PoseNet
     from .train import checkpoint_model_config, load_checkpoint_file
-    from .cli import UsageError
     ckpt = load_checkpoint_file(path)
     if isinstance(ckpt, torch.nn.Module):
         return ckpt.eval()
@@ -612,7 +611,6 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
     wrist: where the synthesised wrist sensors are ("hand": on the back of the hands, where the
     shipped model expects them; "forearm": wrist straps, skeleton.sensor_bones).
     noise: "realistic" sensor errors (what the targets are for) or "none" (perfect sensors)."""
-    from .cli import UsageError
     for m in motions:
         if m.num_frames == 0:
             raise UsageError(f"motion {m.name}: no frames to evaluate")
@@ -682,7 +680,6 @@ FINITE_METRICS = ("angle_all", "angle_dip", "sip", "pos")
 
 
 def _require_finite(results) -> None:
-    from .cli import CommandError
     for name, s in results.items():
         bad = [k for k in FINITE_METRICS if not math.isfinite(s[k])]
         if bad:
@@ -716,7 +713,6 @@ def _trim(motions, max_clips, max_seconds):
         for m in motions:
             n = int(max_seconds * m.fps)
             if n < 1:
-                from .cli import UsageError
                 raise UsageError(f"--max-seconds {max_seconds:g} is shorter than one frame at {m.fps:g} Hz")
             out.append(sk.Motion(m.name, m.subject, m.fps, m.local_rot[:n], m.root_pos[:n], m.offsets))
         motions = out

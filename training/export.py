@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from . import skeleton as sk
-from .cli import CommandError, UsageError
+from .errors import CommandError, UsageError
 from .model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters, non_finite_tensors
 
 REPO = Path(__file__).resolve().parents[1]

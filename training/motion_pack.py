@@ -32,7 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
-from .cli import CommandError, UsageError, atomic_write_bytes
+from .errors import CommandError, UsageError
+from .files import atomic_write_bytes
+from .progress import progress_bar
 
 MAGIC = b"MOCAPPK1"
 FORMAT = 1
@@ -123,15 +125,14 @@ def _retarget(item):
 def write_pack(clips, out, workers=None, progress: bool = True) -> dict:
     """Pack (clip, subject, path, elbow_reversed) rows (dataset.list_clips) into `out`; returns a
     summary. Written through a temporary file: a failed write leaves no partial pack."""
-    from .dataset import _progress
     if not clips:
         raise UsageError("no clips to pack")
     workers = max(1, min(workers or os.cpu_count() or 1, len(clips)))
     if workers == 1:
-        results = list(_progress(map(_retarget, clips), len(clips), "packing", progress))
+        results = list(progress_bar(map(_retarget, clips), len(clips), "packing", progress))
     else:
         with ProcessPoolExecutor(workers) as ex:
-            results = list(_progress(ex.map(_retarget, clips, chunksize=4), len(clips), "packing", progress))
+            results = list(progress_bar(ex.map(_retarget, clips, chunksize=4), len(clips), "packing", progress))
     header = {"format": FORMAT, "rot_scale": ROT_SCALE, "pos_scale": POS_SCALE, "joints": sk.NUM_JOINTS,
               "clips": [{"name": r[0], "subject": r[1], "frame_time": r[2], "frames": r[4],
                          "offsets": r[3].tolist()} for r in results]}
@@ -195,23 +196,3 @@ def read_pack(path, fps: float = sk.MODEL_FPS) -> list:
             raise UsageError(f"{path}: clip {m.name} decodes to non-finite {bad}")
         out.append(m)
     return out
-
-
-def main(args) -> int:
-    from . import dataset
-    if args.bvh:
-        clips = dataset.list_clips(Path(args.bvh), args.split)
-    else:
-        clips = dataset.list_clips(dataset.extracted_cmu(), args.split)
-    s = write_pack(clips, args.out, workers=args.workers)
-    print(f"pack: {s['clips']} clips, {s['source_frames']} source frames -> {args.out} "
-          f"({s['bytes'] / 1e6:.1f} MB)")
-    return 0
-
-
-def add_arguments(parser) -> None:
-    parser.add_argument("--out", required=True, help="the pack file to write")
-    parser.add_argument("--split", default=None, choices=["train", "val", "test"],
-                        help="only this split's subjects (default: every clip)")
-    parser.add_argument("--bvh", default=None, help="a BVH folder instead of the extracted CMU data")
-    parser.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
+from .errors import CommandError, UsageError
 
 @dataclass(frozen=True)
 class Candidate:
@@ -210,7 +211,6 @@ def write_plot(out_dir, results, candidates) -> Path:
 def sensor_gain(motions, checkpoint, out_dir, seed=0, source="", noise="realistic",
                 candidates=CANDIDATES) -> dict:
     from . import evaluate as ev
-    from .cli import UsageError
     if not motions:
         raise UsageError("no motions to measure")
     for m in motions:
@@ -253,7 +253,6 @@ def main(args=None) -> int:
         args = add_arguments(argparse.ArgumentParser(prog="python3 -m training sensor-gain")).parse_args(args)
     from . import dataset
     from . import evaluate as ev
-    from .cli import CommandError
     ckpt = args.checkpoint or ev.find_checkpoint()
     if ckpt is None:
         raise CommandError("no checkpoint found; pass --checkpoint")

@@ -49,7 +49,9 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
-from .cli import number_type, same_file
+from .cli import number_type
+from .errors import CommandError, UsageError
+from .files import same_file
 
 TRAJECTORY_RATE = 100.0
 MAX_LEAD_IN_S = 60.0   # a blend from the T-pose into the clip; minutes of it would be a mistake
@@ -149,7 +151,6 @@ def _read_motion_start(sensor_csv) -> tuple[float, float]:
                 start = t
                 break
     if first is None or start is None:
-        from .cli import CommandError
         raise CommandError(f"{sensor_csv}: no motion phase rows (mocapctl wrote no motion)")
     return first, start
 
@@ -175,7 +176,6 @@ def write_truth_csv(path, local_rot, root_pos, fps, t_session_start, motion_star
 def _check_outputs(bvh_path, outputs: dict) -> None:
     """Every output is a new or regular file, none is the BVH being read, no two are one file:
     writing one would otherwise destroy the input or another output before it is used."""
-    from .cli import UsageError
     named = list(outputs.items())
     for i, (what, path) in enumerate(named):
         if path.exists() and not path.is_file():
@@ -204,7 +204,6 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
     """Write CAPTURE, its sensor truth CSV and the pose truth .npz; returns a dict of paths and
     facts. `motion` (a Motion) replaces reading bvh_path when given."""
     from .ort import mocapctl_path
-    from .cli import CommandError, UsageError
     if not (isinstance(seed, (int, np.integer)) and 0 <= int(seed) < 2 ** 64):
         raise UsageError(f"--seed {seed}: a whole number from 0 to 2^64-1")
     if not (math.isfinite(lead_in) and 0.0 <= lead_in <= MAX_LEAD_IN_S):

@@ -35,7 +35,6 @@ training/results/loss.png.
 """
 from __future__ import annotations
 
-import io
 import json
 import math
 import os
@@ -51,8 +50,9 @@ import torch
 import torch.nn.functional as F
 
 from . import skeleton as sk
-from .cli import (NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, CommandError, UsageError,
-                  atomic_write_bytes, number_type)
+from .cli import NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, number_type
+from .errors import CommandError, UsageError
+from .files import atomic_torch_save
 from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch, non_finite_tensors
 from .rarity import clip_rarity
 from .synthesis import Augmentation, synthesize, vary_motion
@@ -563,19 +563,6 @@ def save_weights(src, dst) -> None:
     ck = load_checkpoint_file(src)
     atomic_torch_save({"model": ck["model"], "config": ck["config"], "step": ck.get("step"),
                        "best": ck.get("best")}, dst)
-
-
-def atomic_torch_save(obj, path) -> None:
-    """torch.save through cli.atomic_write_bytes: an interrupted or failed write (disk full,
-    Ctrl-C) leaves the previous file, never a truncated one; a failed write is a CommandError
-    naming `path`.
-
-    torch.save serialises into memory and Python writes the file: torch's own file writer, on a
-    full disk, raises and then aborts the whole process (C++ terminate in its destructor, exit
-    134) before any handler runs. A checkpoint is tens of MB, so the copy in memory is cheap."""
-    buffer = io.BytesIO()
-    torch.save(obj, buffer)
-    atomic_write_bytes(buffer.getbuffer(), path, "checkpoint")
 
 
 def load_checkpoint_file(path, device="cpu") -> dict:

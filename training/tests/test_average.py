@@ -65,7 +65,7 @@ def test_average_ignores_the_training_only_dropout(tmp_path):
 
 def test_average_writes_its_output_atomically(tmp_path, monkeypatch):
     import os
-    from training.cli import CommandError
+    from training.errors import CommandError
     _checkpoint(tmp_path / "a.pt", seed=1)
     _checkpoint(tmp_path / "b.pt", seed=2)
     out = tmp_path / "out" / "soup.pt"
@@ -82,7 +82,7 @@ def test_average_writes_its_output_atomically(tmp_path, monkeypatch):
 
 
 def test_average_refuses_non_finite_weights_inputs_and_an_input_as_output(tmp_path):
-    from training.cli import UsageError
+    from training.errors import UsageError
     a = _checkpoint(tmp_path / "a.pt", seed=1)
     _checkpoint(tmp_path / "b.pt", seed=2)
     state = a.state_dict()

@@ -8,7 +8,7 @@ import pytest
 from training import dataset as ds
 from training import skeleton as sk
 from training.bvh import BvhError
-from training.cli import CommandError, UsageError
+from training.errors import CommandError, UsageError
 
 # subject numbers of the 96 subjects in ../shared/data/cmu (a fact from its manifest)
 CMU_SUBJECTS = [1, 2, 3, 6, 7, 8, 9, 10, 11, 12, 13, 15, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29,

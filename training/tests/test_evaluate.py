@@ -261,7 +261,7 @@ def test_bad_option_values_are_usage_errors(option, value, capsys):
 
 
 def test_max_seconds_shorter_than_a_frame_is_refused():
-    from training.cli import UsageError
+    from training.errors import UsageError
     m = procedural.make_motion("walk", 1.0, seed=0)
     with pytest.raises(UsageError, match="--max-seconds 0.001 is shorter than one frame"):
         ev._trim([m], 0, 0.001)
@@ -270,7 +270,7 @@ def test_max_seconds_shorter_than_a_frame_is_refused():
 
 def test_a_report_with_nan_model_metrics_is_refused(tmp_path):
     """NaN metrics are a broken model (or input), not a "-" in a report."""
-    from training.cli import CommandError
+    from training.errors import CommandError
     torch.manual_seed(0)
     cfg = ModelConfig(embed=16, hidden=8, layers=1, head=16)
     net = PoseNet(cfg).eval()

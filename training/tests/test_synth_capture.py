@@ -80,7 +80,7 @@ def _clip(tmp_path, seconds=1.0):
 def test_outputs_that_would_destroy_the_clip_or_each_other_are_refused(tmp_path):
     """`--out clip.bvh` (or --truth-csv / --sensor-truth) replaced the BVH being read; two outputs
     naming one file overwrote each other; an existing folder as output was half written."""
-    from training.cli import UsageError
+    from training.errors import UsageError
     clip = _clip(tmp_path)
     before = clip.read_bytes()
     for option in ("--out", "--truth-csv", "--sensor-truth"):
@@ -111,7 +111,7 @@ def test_out_of_range_values_are_usage_errors(tmp_path, option, value, capsys):
 def test_a_failing_engine_step_is_one_error_and_leaves_no_files(tmp_path):
     """mocapctl synth cannot write the sensor truth (its folder does not exist): before, a
     traceback, and the trajectory and a capture were left behind."""
-    from training.cli import CommandError
+    from training.errors import CommandError
     clip = _clip(tmp_path)
     with pytest.raises(CommandError, match="mocapctl synth failed: .*missing"):
         sc.main([str(clip), "--out", str(tmp_path / "x.cap"),

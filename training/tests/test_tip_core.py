@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from training import export, skeleton as sk, train as tr
-from training.cli import UsageError
+from training.errors import UsageError
 from training.model import (MirrorEnsemble, ModelConfig, PoseNet, WindowedTransformerCore,
                             _WindowedAttentionBlock)
 

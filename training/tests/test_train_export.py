@@ -312,7 +312,7 @@ def test_ctrl_c_finishes_the_step_saves_and_resumes_exactly(tmp_path, monkeypatc
     a run that was never interrupted."""
     import os
     import signal
-    from training.cli import CommandError
+    from training.errors import CommandError
     train_m = _motions(4, 0)
 
     tr.train(_nine_step_run(tmp_path, "whole"), train_m, [])
@@ -353,7 +353,7 @@ def test_stop_after_belongs_to_one_sitting(tmp_path, monkeypatch):
 
 def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys):
     from training.__main__ import main
-    from training.cli import UsageError
+    from training.errors import UsageError
     motions = _motions(3, 0)
     tr.train(_cli(TINY_RUN + _dirs(tmp_path)), motions, motions[:1])      # anchored, hand, tiny
     for extra in (["--no-anchor"], ["--wrist-sensor", "forearm"], ["--size", "small"], ["--lr", "0.5"]):
@@ -374,7 +374,7 @@ def test_resume_refuses_options_that_contradict_the_checkpoint(tmp_path, capsys)
 
 def test_resume_without_a_last_checkpoint_is_an_error(tmp_path, capsys):
     from training.__main__ import main
-    from training.cli import UsageError
+    from training.errors import UsageError
     ck = tmp_path / "ck"
     ck.mkdir()
     (ck / "best.pt").write_bytes(b"the earlier run's best")
@@ -501,7 +501,7 @@ def test_export_check_on_the_real_onnx_runtime_passes_and_fails(tmp_path, monkey
 
 def test_weights_only_save_is_atomic(tmp_path, monkeypatch):
     import os
-    from training.cli import CommandError
+    from training.errors import CommandError
     src = _tiny_checkpoint(tmp_path / "tiny.pt")
     dst = tmp_path / "w" / "weights.pt"
     tr.save_weights(src, dst)
@@ -523,7 +523,7 @@ def _tiny_config(tmp_path, **kw):
 
 
 def test_training_stops_at_a_non_finite_loss_and_saves_no_nan_weights(tmp_path, monkeypatch):
-    from training.cli import CommandError, UsageError
+    from training.errors import CommandError, UsageError
     motions = _motions(2, 0)
     with pytest.raises(CommandError, match=r"step 1: the training loss is nan .*--pos-weight"):
         tr.train(_tiny_config(tmp_path, w_pos=float("nan")), motions, motions[:1])
@@ -578,7 +578,7 @@ def test_good_numeric_training_options_pass():
 
 
 def test_smoke_refuses_options_that_choose_the_data(fixture_dir):
-    from training.cli import UsageError
+    from training.errors import UsageError
     d, _ = fixture_dir
     for extra in (["--bvh", d], ["--val-bvh", d], ["--max-clips", "3"]):
         with pytest.raises(UsageError, match=f"--smoke trains on procedural motions .* {extra[0]}"):
@@ -586,7 +586,7 @@ def test_smoke_refuses_options_that_choose_the_data(fixture_dir):
 
 
 def test_export_refuses_non_finite_weights_before_writing_anything(tmp_path):
-    from training.cli import UsageError
+    from training.errors import UsageError
     net = export.untrained_model(seed=0, config=ModelConfig(16, 8, 1, 16))
     with torch.no_grad():
         net.lstm.bias_ih_l0[2] = float("nan")
@@ -621,7 +621,7 @@ def test_clips_whose_root_jumps_are_left_out_of_training_only(tmp_path, capsys):
     out = capsys.readouterr().out
     assert f"1 clips left out, their root jumps faster than 12 m/s (capture glitches): {glitch.name}" in out
     assert s["train_clips"] == len(clean)
-    from training.cli import UsageError
+    from training.errors import UsageError
     with pytest.raises(UsageError, match="every training clip has root jumps"):
         tr.train(_tiny_config(tmp_path / "b"), [glitch], clean[:1])
 
