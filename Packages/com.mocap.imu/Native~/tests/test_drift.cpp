@@ -1,4 +1,4 @@
-// Root integration and contact-based drift correction (src/drift.c) on synthetic sequences.
+// Root integration and contact-based drift correction (src/pose/drift.c) on synthetic sequences.
 #include <gtest/gtest.h>
 
 #include <cmath>

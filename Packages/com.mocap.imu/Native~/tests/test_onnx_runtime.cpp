@@ -1,4 +1,4 @@
-// The ONNX Runtime module (src/onnx_runtime.c) against the REAL ONNX Runtime library
+// The ONNX Runtime module (src/pose/onnx_runtime.c) against the REAL ONNX Runtime library
 // (scripts/fetch_onnxruntime.sh). Contract violations use tiny models made by
 // tests/make_onnx_fixtures.py (python3 + onnx); the shipped model is
 // Runtime/Models/mocap_pose_fp32.onnx. Tests skip only when ONNX Runtime cannot be loaded.

@@ -1,4 +1,4 @@
-// Output smoothing (src/pose_filter.c): a one-euro filter per joint rotation.
+// Output smoothing (src/pose/pose_filter.c): a one-euro filter per joint rotation.
 #include <gtest/gtest.h>
 
 #include <cmath>

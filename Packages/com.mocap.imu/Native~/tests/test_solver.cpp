@@ -1,4 +1,4 @@
-// The pose solver (src/solver.c, src/model.c) through the public API against the REAL ONNX
+// The pose solver (src/pose/solver.c, src/pose/model.c) through the public API against the REAL ONNX
 // Runtime (scripts/fetch_onnxruntime.sh) and the shipped model (Runtime/Models/
 // mocap_pose_fp32.onnx, untrained: only its contract is relied on, never its accuracy).
 // Skips only when ONNX Runtime cannot be loaded.

@@ -1,5 +1,5 @@
 // VMC sender: a UDP receiver of the test's own, bound to 127.0.0.1, decodes what the public API
-// sends (an OSC decoder written here, independent of src/osc_encoder.c): bundle structure, bone
+// sends (an OSC decoder written here, independent of src/output/osc_encoder.c): bundle structure, bone
 // names and counts, Unity coordinates of a known pose, the rate cap, several destinations, and
 // destinations that must fail (nothing is ever sent off this machine). Also the public BVH API.
 #include <gtest/gtest.h>

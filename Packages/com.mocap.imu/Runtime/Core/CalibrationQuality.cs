@@ -9,7 +9,7 @@ using System.Globalization;
 
 namespace Mocap.Imu
 {
-    /// <summary>The engine's per-sensor acceptance limits (src/calibration.c).</summary>
+    /// <summary>The engine's per-sensor acceptance limits (src/imu/calibration.c).</summary>
     public static class CalibrationLimits
     {
         /// <summary>RMS angular rate, deg/s (movement).</summary>

@@ -1,6 +1,6 @@
 // A pure C# reader of the engine's raw capture files (Native~/docs/capture-format.md), so the
 // editor can inspect and play captures without loading the engine. It follows the engine's
-// reader rule for rule (src/capture_file.c): the same header checks and messages, the same
+// reader rule for rule (src/io/capture_file.c): the same header checks and messages, the same
 // chunk validation, the same resynchronisation after a damaged chunk and the same counters, so
 // both see exactly the same records in the same file (the tests check this against a replay).
 

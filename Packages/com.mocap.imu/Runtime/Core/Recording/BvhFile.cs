@@ -1,6 +1,6 @@
 // A general BVH (Biovision hierarchy) reader: any hierarchy, any number of roots, any channel
 // count and order per joint, End Sites. It reads the engine's pose BVH (`mocapctl replay --out
-// X.bvh`, Native~/src/bvh_writer.c) and is deliberately written from the format, not from that
+// X.bvh`, Native~/src/output/bvh_writer.c) and is deliberately written from the format, not from that
 // writer, so the two check each other (issue 7 asks for two independent implementations).
 //
 // Conventions (those of the engine, Blender and training/bvh.py):

@@ -1,5 +1,5 @@
 /* Public BVH export (mocap_imu.h, "Streaming and export"): the streaming writer of
- * src/bvh_writer.c behind the stable C API, so C# (the editor's take export) writes the same
+ * src/output/bvh_writer.c behind the stable C API, so C# (the editor's take export) writes the same
  * files as `mocapctl replay --out`. */
 #include <math.h>
 #include <stdlib.h>
