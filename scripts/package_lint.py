@@ -24,6 +24,14 @@ Checks (each problem is printed as "<file>: <problem>"; exit status 1 when there
                  or references one that does is limited to the Editor and the standalone
                  platforms a native plugin is built for; no assembly compiles on a platform
                  where one of its package references does not
+  samples        a sample is copied into the user's Assets/ and compiled for every platform the
+                 project builds: its asmdefs have names unique across the package and every
+                 sample, references resolving to the package's asmdefs, its own or a known Unity
+                 assembly (never another sample's: a user may import one alone), and the
+                 package's platform rules above (engine users limited to the plugin platforms,
+                 no platform a reference lacks, Editor/ asmdefs Editor-only); a sample script
+                 outside its sample's asmdefs and Editor/ folders must not use Mocap.Imu (it
+                 would be Assembly-CSharp, built where the package's assemblies are not)
   modules        every built-in module the C# code uses (Physics, ArticulationBody, Animator,
                  AvatarBuilder, GUI, XRSettings...; outside engine-free assemblies, samples
                  included) is a dependency at "1.0.0", and every declared module is used; a
@@ -298,8 +306,10 @@ class Linter:
             if n not in state:
                 visit(n, [])
         self.check_scripts_owned(sorted(Path(r).parent.as_posix() for r in asmdefs))
-        self.check_platforms(by_name, graph)
+        self.asmdef_platforms, self.asmdef_native = self.check_platforms(by_name, graph)
         self.asmdefs = by_name
+        self.asmdef_guids = guid_to_name
+        self.asmdef_graph = graph
 
     def platforms_of(self, rel, a):
         """The platforms an asmdef compiles on (Unity's names), checking the two lists."""
@@ -333,14 +343,24 @@ class Linter:
                 return True
         return False
 
-    def check_platforms(self, by_name, graph):
-        platforms = {n: self.platforms_of(rel, a) for n, (rel, a) in by_name.items()}
+    def native_assemblies(self, by_name, graph, known=frozenset()):
+        """The assemblies that call the engine (own DllImport) or reference one that does."""
         native = {n for n, (rel, _) in by_name.items() if self.calls_native(Path(rel).parent)}
+        native |= set(known)
         changed = True
         while changed:  # an assembly that references a native one needs the engine too
             before = len(native)
             native |= {n for n in graph if any(t in native for t in graph[n])}
             changed = len(native) != before
+        return native
+
+    def check_platforms(self, by_name, graph, known_platforms=None, known_native=frozenset()):
+        """Engine users limited to the plugin platforms; no platform a reference lacks. The
+        known_ arguments hold what is already decided for assemblies outside by_name. Returns
+        the platforms of every assembly and the set of those that need the engine."""
+        platforms = dict(known_platforms or {})
+        platforms.update({n: self.platforms_of(rel, a) for n, (rel, a) in by_name.items()})
+        native = self.native_assemblies(by_name, graph, known_native)
         for name in sorted(by_name):
             rel, _ = by_name[name]
             if name in native:
@@ -354,6 +374,7 @@ class Linter:
                 if missing:
                     self.fail(rel, f"{name} compiles for {', '.join(sorted(missing))}, where its "
                               f"reference {target} does not")
+        return platforms, native
 
     def check_asmdef_rules(self, rel, name, a):
         folder = Path(rel).parent.as_posix()
@@ -384,6 +405,97 @@ class Linter:
                 if re.search(r"^\s*using\s+(static\s+)?Unity(Engine|Editor)\b", text, re.M):
                     self.fail(cs.relative_to(self.pkg).as_posix(),
                               "uses UnityEngine/UnityEditor inside the engine-free core")
+
+    # -------------------------------------------------------------------------------- samples
+    def sample_folders(self):
+        samples = getattr(self, "manifest", {}).get("samples", [])
+        if not isinstance(samples, list):
+            return []
+        return [s["path"].rstrip("/") for s in samples
+                if isinstance(s, dict) and isinstance(s.get("path"), str)
+                and s["path"].startswith("Samples~/") and (self.pkg / s["path"]).is_dir()]
+
+    def sample_assets(self, folder, pattern):
+        """Files of a sample Unity imports once it is copied under Assets/ (none in its ~ or
+        hidden folders), as (path relative to the package, path inside the sample)."""
+        for path in sorted((self.pkg / folder).rglob(pattern)):
+            inner = path.relative_to(self.pkg / folder)
+            if not any(p.endswith("~") or p.startswith(".") for p in inner.parts):
+                yield path.relative_to(self.pkg).as_posix(), inner
+
+    def check_samples(self):
+        package = getattr(self, "asmdefs", None)
+        if package is None:
+            return
+        where = {name: rel for name, (rel, _) in package.items()}
+        samples = {}
+        for folder in self.sample_folders():
+            own = {}
+            for rel, inner in self.sample_assets(folder, "*.asmdef"):
+                try:
+                    a = json.loads((self.pkg / rel).read_text(encoding="utf-8"))
+                except (json.JSONDecodeError, OSError):
+                    continue  # reported by check_json_files
+                name = a.get("name") if isinstance(a, dict) else None
+                if not isinstance(name, str) or not name:
+                    self.fail(rel, 'asmdef has no "name"')
+                elif name in where:
+                    self.fail(rel, f"asmdef name {name!r} is also used by {where[name]} (a user "
+                              "importing both could not compile)")
+                else:
+                    where[name] = rel
+                    own[name] = (rel, a)
+            samples[folder] = own
+        for folder, own in samples.items():
+            self.check_sample_asmdefs(folder, own, samples)
+            self.check_sample_scripts(folder, own)
+
+    def check_sample_asmdefs(self, folder, own, samples):
+        package = self.asmdefs
+        others = {n: f for f, o in samples.items() if f != folder for n in o}
+        graph = {}
+        for name, (rel, a) in own.items():
+            refs = a.get("references", [])
+            if not isinstance(refs, list):
+                self.fail(rel, '"references" must be a list')
+                refs = []
+            graph[name] = []
+            for r in refs:
+                if not isinstance(r, str):
+                    self.fail(rel, f"reference {r!r} is not a string")
+                    continue
+                target = r
+                if r.startswith("GUID:"):
+                    target = self.asmdef_guids.get(r[5:])  # samples have no .meta: package only
+                if target in own or target in package:
+                    graph[name].append(target)
+                    referenced = (own.get(target) or package.get(target))[1]
+                    if a.get("includePlatforms") != ["Editor"] and \
+                            referenced.get("includePlatforms") == ["Editor"]:
+                        self.fail(rel, f"player assembly {name} references Editor-only {target}")
+                elif target in others:
+                    self.fail(rel, f"reference {r!r} is an asmdef of {others[target]}: a project may "
+                              "have imported this sample alone")
+                elif target not in KNOWN_UNITY_ASSEMBLIES:
+                    self.fail(rel, f"reference {r!r} resolves to no asmdef of the package or of "
+                              "this sample nor a known Unity assembly "
+                              f"({', '.join(sorted(KNOWN_UNITY_ASSEMBLIES))})")
+            in_editor_folder = "Editor" in Path(rel).relative_to(folder).parts[:-1]
+            if in_editor_folder and a.get("includePlatforms") != ["Editor"]:
+                self.fail(rel, 'Editor assembly must have includePlatforms ["Editor"]')
+        self.check_platforms(own, graph, self.asmdef_platforms, self.asmdef_native)
+
+    def check_sample_scripts(self, folder, own):
+        asmdef_dirs = [Path(rel).parent for rel, _ in own.values()]
+        for rel, inner in self.sample_assets(folder, "*.cs"):
+            if any(d in Path(rel).parents for d in asmdef_dirs) or "Editor" in inner.parts[:-1]:
+                continue
+            code = CS_NOISE.sub(" ", (self.pkg / rel).read_text(encoding="utf-8", errors="replace"))
+            if re.search(r"\bMocap\.Imu\b", code):
+                self.fail(rel, "uses Mocap.Imu outside an asmdef of its sample: imported, it "
+                          "compiles into Assembly-CSharp for every platform, but the package's "
+                          f"assemblies exist only for {', '.join(sorted(NATIVE_PLATFORMS))}; give "
+                          "the sample an asmdef with those includePlatforms")
 
     def check_scripts_owned(self, asmdef_dirs):
         for cs in sorted(self.pkg.rglob("*.cs")):
@@ -499,6 +611,7 @@ class Linter:
         self.check_json_files()
         self.check_metas()
         self.check_asmdefs()
+        self.check_samples()
         self.check_plugins()
         self.check_modules()
         return self.problems

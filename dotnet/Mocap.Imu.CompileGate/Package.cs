@@ -34,12 +34,19 @@ namespace Mocap.Imu.CompileGate
             }));
     }
 
-    /// <summary>A sample of package.json's "samples", compiled as the scripts of a user's project.</summary>
+    /// <summary>
+    /// A sample of package.json's "samples", compiled as a user's project that imported only it:
+    /// its own asmdefs, and the scripts outside them as Assembly-CSharp (Assembly-CSharp-Editor
+    /// under an Editor/ folder).
+    /// </summary>
     sealed class Sample
     {
         public string DisplayName, Folder;
+        public readonly List<Asmdef> Asmdefs = new List<Asmdef>();
         public readonly List<string> RuntimeSources = new List<string>();
         public readonly List<string> EditorSources = new List<string>();
+
+        public bool HasScripts => RuntimeSources.Count > 0 || EditorSources.Count > 0 || Asmdefs.Any(a => a.Sources.Count > 0);
     }
 
     sealed class Package
@@ -66,6 +73,12 @@ namespace Mocap.Imu.CompileGate
                 owner.Sources.Add(source);
             }
             package.LoadSamples();
+            // A user may import several samples next to the package: every name must stay unique.
+            var everyName = package.Asmdefs.Select(a => (a.Name, Where: package.Relative(a.Path)))
+                .Concat(package.Samples.SelectMany(s => s.Asmdefs.Select(a => (a.Name, Where: package.Relative(a.Path)))));
+            var clash = everyName.GroupBy(n => n.Name).FirstOrDefault(g => g.Count() > 1);
+            if (clash != null)
+                throw new GateException($"two asmdefs are named {clash.Key} ({string.Join(", ", clash.Select(n => n.Where))})");
             return package;
         }
 
@@ -141,12 +154,19 @@ namespace Mocap.Imu.CompileGate
                 if (!Directory.Exists(folder)) throw new GateException($"sample folder {Relative(folder)} does not exist");
                 var sample = new Sample { DisplayName = entry.GetProperty("displayName").GetString(), Folder = folder };
                 // Once imported the sample lives under Assets/, where every folder is imported
-                // (its own '~' folders aside) and scripts in any Editor/ folder are editor scripts.
-                foreach (var file in UnitySources(folder))
+                // (its own '~' folders aside). A script belongs to the nearest asmdef above it; an
+                // Editor/ folder makes editor scripts only outside every asmdef.
+                var files = UnitySources(folder).ToList();
+                foreach (var asmdefPath in files.Where(f => f.EndsWith(".asmdef", StringComparison.Ordinal)))
+                    sample.Asmdefs.Add(ReadAsmdef(asmdefPath));
+                foreach (var file in files.Where(f => f.EndsWith(".cs", StringComparison.Ordinal)))
                 {
-                    if (file.EndsWith(".asmdef", StringComparison.Ordinal))
-                        throw new GateException($"{Relative(file)}: asmdefs inside samples are not modelled by the compile gate");
-                    if (!file.EndsWith(".cs", StringComparison.Ordinal)) continue;
+                    var owner = OwningAsmdef(sample.Asmdefs, file);
+                    if (owner != null)
+                    {
+                        owner.Sources.Add(file);
+                        continue;
+                    }
                     var parts = System.IO.Path.GetRelativePath(folder, file).Split(System.IO.Path.DirectorySeparatorChar);
                     (parts.Take(parts.Length - 1).Contains("Editor") ? sample.EditorSources : sample.RuntimeSources).Add(file);
                 }
@@ -154,11 +174,19 @@ namespace Mocap.Imu.CompileGate
             }
         }
 
-        /// <summary>The asmdefs Unity compiles for a target, dependencies first.</summary>
-        public IEnumerable<Asmdef> AssembliesFor(Target target, UnityVersion version)
+        /// <summary>The package's asmdefs Unity compiles for a target, dependencies first.</summary>
+        public IEnumerable<Asmdef> AssembliesFor(Target target, UnityVersion version) =>
+            BuildOrder(Asmdefs, target, version, Resolve);
+
+        /// <summary>A sample's own asmdefs Unity compiles for a target, dependencies first.</summary>
+        public IEnumerable<Asmdef> AssembliesFor(Sample sample, Target target, UnityVersion version) =>
+            BuildOrder(sample.Asmdefs, target, version, r => Resolve(sample, r));
+
+        static IEnumerable<Asmdef> BuildOrder(IEnumerable<Asmdef> asmdefs, Target target, UnityVersion version,
+                                              Func<string, Asmdef> resolve)
         {
             var defines = new HashSet<string>(target.Defines.Concat(version.Defines));
-            var included = Asmdefs.Where(a => a.BuildsFor(target) && a.ConstraintsHold(defines)).ToList();
+            var included = asmdefs.Where(a => a.BuildsFor(target) && a.ConstraintsHold(defines)).ToList();
             var ordered = new List<Asmdef>();
             var visiting = new HashSet<Asmdef>();
             void Visit(Asmdef a)
@@ -167,7 +195,7 @@ namespace Mocap.Imu.CompileGate
                 if (!visiting.Add(a)) throw new GateException($"asmdef reference cycle through {a.Name}");
                 foreach (var r in a.References)
                 {
-                    var dep = Resolve(r);
+                    var dep = resolve(r);
                     if (dep != null && included.Contains(dep)) Visit(dep);
                 }
                 ordered.Add(a);
@@ -177,9 +205,18 @@ namespace Mocap.Imu.CompileGate
         }
 
         /// <summary>An asmdef of this package named by a reference ("Name" or "GUID:..."), or null.</summary>
-        public Asmdef Resolve(string reference) =>
+        public Asmdef Resolve(string reference) => Find(Asmdefs, reference);
+
+        /// <summary>
+        /// An asmdef a sample's asmdef can reach: one of the sample's own, else one of the package
+        /// (never another sample's: a project may have imported only this one), or null.
+        /// </summary>
+        public Asmdef Resolve(Sample sample, string reference) => Find(sample.Asmdefs, reference) ?? Resolve(reference);
+
+        // A sample's asmdefs have no committed .meta (Unity does not track ~ folders), so no GUID.
+        static Asmdef Find(IEnumerable<Asmdef> asmdefs, string reference) =>
             reference.StartsWith("GUID:", StringComparison.Ordinal)
-                ? Asmdefs.FirstOrDefault(a => a.Guid == reference.Substring(5))
-                : Asmdefs.FirstOrDefault(a => a.Name == reference);
+                ? asmdefs.FirstOrDefault(a => a.Guid != null && a.Guid == reference.Substring(5))
+                : asmdefs.FirstOrDefault(a => a.Name == reference);
     }
 }

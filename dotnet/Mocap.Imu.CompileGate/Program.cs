@@ -1,9 +1,10 @@
 // The Unity compile gate: compiles the package the way a Unity project would, without Unity.
 // For each Unity version (2022.3, 6000.0) it first compiles the declaration-only Unity API of
 // ../UnityApi, then one compilation per asmdef of the package and per target (the Linux editor,
-// and Windows / Linux / macOS players), with exactly the references, defines and options the
-// asmdef gives it, then each sample alone as Assembly-CSharp (and Assembly-CSharp-Editor for its
-// Editor/ folders) of a project that imported only that sample.
+// the Windows / Linux / macOS players, and the Android player, where the package is left out),
+// with exactly the references, defines and options the asmdef gives it, then each sample alone,
+// as a project that imported only that sample: the sample's own asmdefs, and its other scripts
+// as Assembly-CSharp (Assembly-CSharp-Editor for its Editor/ folders).
 // Prints one line per compile unit, the diagnostics of failed ones below it, and closes with
 // "N compile units ok, N failed". Exit code 0 only when every unit compiled warning-free.
 using System;
@@ -56,10 +57,23 @@ namespace Mocap.Imu.CompileGate
                 foreach (var target in Target.All)
                 {
                     var built = new Dictionary<string, MetadataReference>(StringComparer.Ordinal);
-                    foreach (var asmdef in package.AssembliesFor(target, version))
-                        built[asmdef.Name] = UnitCompiler.CompileAsmdef(package, asmdef, target, version, api, references, built, report);
+                    var packageAssemblies = package.AssembliesFor(target, version).ToList();
+                    foreach (var asmdef in packageAssemblies)
+                        built[asmdef.Name] = UnitCompiler.CompileAsmdef(package, package.Resolve, asmdef.Name, asmdef, target,
+                            version, api, references, built, report);
+                    var leftOut = package.Asmdefs.Except(packageAssemblies).Select(a => a.Name).ToList();
                     foreach (var sample in package.Samples)
+                    {
                         UnitCompiler.CompileSample(package, sample, target, version, api, references, built, report);
+                        var sampleAssemblies = package.AssembliesFor(sample, target, version);
+                        leftOut.AddRange(sample.Asmdefs.Except(sampleAssemblies)
+                            .Select(a => $"{package.Relative(sample.Folder)} {a.Name}"));
+                    }
+                    // Not units (Unity builds nothing of them there), but said, so that a target
+                    // with few units shows why.
+                    if (leftOut.Count > 0)
+                        Console.WriteLine($"not built for [unity-{version.Name} {target.Name}] (platforms or " +
+                                          $"defineConstraints): {string.Join(", ", leftOut)}");
                 }
             }
             Console.WriteLine($"{report.Ok} compile units ok, {report.Failed} failed");

@@ -40,8 +40,9 @@ namespace Mocap.Imu.CompileGate
     }
 
     /// <summary>
-    /// A compile target: the Linux editor, or a standalone player. Its asmdef platform name, the
-    /// defines Unity sets for it, and whether editor-only assemblies and UnityEditor exist there.
+    /// A compile target: the Linux editor, a standalone player, or the Android player (a platform
+    /// without the native plugin). Its asmdef platform name, the defines Unity sets for it, and
+    /// whether editor-only assemblies and UnityEditor exist there.
     /// </summary>
     sealed class Target
     {
@@ -61,23 +62,25 @@ namespace Mocap.Imu.CompileGate
         static readonly string[] Common =
         {
             "NET_STANDARD_2_1", "NET_STANDARD", "NETSTANDARD2_1", "NETSTANDARD", "CSHARP_7_3_OR_NEWER", "UNITY_64",
-            "UNITY_STANDALONE",
         };
 
         // The editor runs on Linux with the Linux player as active build target, the test framework
         // present (UNITY_INCLUDE_TESTS) and the old input manager; the players vary the scripting
-        // backend and the active input handling so that both sides of those #ifs compile.
+        // backend and the active input handling so that both sides of those #ifs compile. Android
+        // (ARM64, so IL2CPP) stands for every platform outside the package's includePlatforms, as
+        // a Quest or phone project builds it: what the package leaves out there must not be needed.
         public static readonly Target[] All =
         {
             new Target("editor", "Editor", true, "UNITY_EDITOR", "UNITY_EDITOR_64", "UNITY_EDITOR_LINUX",
-                "UNITY_STANDALONE_LINUX", "UNITY_INCLUDE_TESTS", "UNITY_ASSERTIONS", "ENABLE_MONO",
+                "UNITY_STANDALONE", "UNITY_STANDALONE_LINUX", "UNITY_INCLUDE_TESTS", "UNITY_ASSERTIONS", "ENABLE_MONO",
                 "ENABLE_LEGACY_INPUT_MANAGER", "DEBUG", "TRACE"),
-            new Target("player-windows", "WindowsStandalone64", false, "UNITY_STANDALONE_WIN", "ENABLE_IL2CPP",
-                "ENABLE_LEGACY_INPUT_MANAGER"),
-            new Target("player-linux", "LinuxStandalone64", false, "UNITY_STANDALONE_LINUX", "ENABLE_MONO",
-                "ENABLE_INPUT_SYSTEM"),
-            new Target("player-macos", "macOSStandalone", false, "UNITY_STANDALONE_OSX", "ENABLE_IL2CPP",
-                "ENABLE_LEGACY_INPUT_MANAGER", "ENABLE_INPUT_SYSTEM"),
+            new Target("player-windows", "WindowsStandalone64", false, "UNITY_STANDALONE", "UNITY_STANDALONE_WIN",
+                "ENABLE_IL2CPP", "ENABLE_LEGACY_INPUT_MANAGER"),
+            new Target("player-linux", "LinuxStandalone64", false, "UNITY_STANDALONE", "UNITY_STANDALONE_LINUX",
+                "ENABLE_MONO", "ENABLE_INPUT_SYSTEM"),
+            new Target("player-macos", "macOSStandalone", false, "UNITY_STANDALONE", "UNITY_STANDALONE_OSX",
+                "ENABLE_IL2CPP", "ENABLE_LEGACY_INPUT_MANAGER", "ENABLE_INPUT_SYSTEM"),
+            new Target("player-android", "Android", false, "UNITY_ANDROID", "ENABLE_IL2CPP", "ENABLE_INPUT_SYSTEM"),
         };
     }
 }

@@ -99,7 +99,13 @@ namespace Mocap.Imu.CompileGate
         static IEnumerable<MetadataReference> EngineReferences(UnityApi api, Target target) =>
             target.IsEditor ? new[] { api.Engine, api.Editor } : new[] { api.Engine };
 
-        public static MetadataReference CompileAsmdef(Package package, Asmdef asmdef, Target target, UnityVersion version,
+        /// <summary>
+        /// Compiles one asmdef with exactly its references, defines and options. resolve finds the
+        /// asmdef a reference names among those it can see; built holds the ones compiled for
+        /// this target. unitName: how the report names it.
+        /// </summary>
+        public static MetadataReference CompileAsmdef(Package package, Func<string, Asmdef> resolve, string unitName,
+                                                      Asmdef asmdef, Target target, UnityVersion version,
                                                       UnityApi api, FrameworkReferences framework,
                                                       IReadOnlyDictionary<string, MetadataReference> built, Report report)
         {
@@ -108,7 +114,7 @@ namespace Mocap.Imu.CompileGate
             if (!asmdef.NoEngineReferences) references.AddRange(EngineReferences(api, target));
             foreach (var name in asmdef.References)
             {
-                var own = package.Resolve(name);
+                var own = resolve(name);
                 if (own != null)
                 {
                     // Unity drops a reference to an assembly that is not built for this target.
@@ -119,7 +125,7 @@ namespace Mocap.Imu.CompileGate
                 {
                     case "UnityEngine.TestRunner": references.Add(api.EngineTestRunner); break;
                     case "UnityEditor.TestRunner": if (target.IsEditor) references.Add(api.EditorTestRunner); break;
-                    default: problems.Add($"{package.Relative(asmdef.Path)}: reference '{name}' is neither an asmdef of this package nor a Unity assembly the gate knows"); break;
+                    default: problems.Add($"{package.Relative(asmdef.Path)}: reference '{name}' is neither an asmdef it can see nor a Unity assembly the gate knows"); break;
                 }
             }
             // Without overrideReferences Unity adds every auto-referenced precompiled assembly of
@@ -134,23 +140,35 @@ namespace Mocap.Imu.CompileGate
                 asmdef.AllowUnsafeCode, references);
             problems.AddRange(Problems(compilation, package.Root));
             if (target.IsEditor) problems.AddRange(InspectorTooltips.Check(compilation, package));
-            report.Unit(asmdef.Name, version, target.Name, problems);
+            report.Unit(unitName, version, target.Name, problems);
             return compilation.ToMetadataReference();
         }
 
+        /// <summary>
+        /// A project that imported only this sample: its asmdefs built for the target (none of
+        /// them is a unit where its platforms leave it out, as with the package's own), then the
+        /// scripts outside them as Assembly-CSharp, which sees every auto-referenced assembly.
+        /// </summary>
         public static void CompileSample(Package package, Sample sample, Target target, UnityVersion version, UnityApi api,
-                                         FrameworkReferences framework, IReadOnlyDictionary<string, MetadataReference> built,
+                                         FrameworkReferences framework, IReadOnlyDictionary<string, MetadataReference> packageBuilt,
                                          Report report)
         {
-            // A project's own scripts see every auto-referenced assembly built for the target.
-            var packageRefs = package.Asmdefs.Where(a => a.AutoReferenced && built.ContainsKey(a.Name)).Select(a => built[a.Name]).ToList();
-            var references = framework.NetStandard.Concat(EngineReferences(api, target)).Concat(packageRefs).ToList();
-            var defines = version.Defines.Concat(target.Defines).ToList();
             var name = package.Relative(sample.Folder);
+            var built = new Dictionary<string, MetadataReference>(packageBuilt, StringComparer.Ordinal);
+            foreach (var asmdef in package.AssembliesFor(sample, target, version))
+                built[asmdef.Name] = CompileAsmdef(package, r => package.Resolve(sample, r), $"{name} {asmdef.Name}",
+                    asmdef, target, version, api, framework, built, report);
+
+            bool hasLooseScripts = sample.RuntimeSources.Count > 0 || sample.EditorSources.Count > 0;
+            if (sample.HasScripts && !hasLooseScripts) return;
+            var autoReferenced = package.Asmdefs.Concat(sample.Asmdefs)
+                .Where(a => a.AutoReferenced && built.ContainsKey(a.Name)).Select(a => built[a.Name]);
+            var references = framework.NetStandard.Concat(EngineReferences(api, target)).Concat(autoReferenced).ToList();
+            var defines = version.Defines.Concat(target.Defines).ToList();
 
             var runtime = Create("Assembly-CSharp", sample.RuntimeSources, defines, false, references);
             var problems = Problems(runtime, package.Root);
-            if (sample.RuntimeSources.Count == 0 && sample.EditorSources.Count == 0) problems.Add($"{name}: the sample has no scripts");
+            if (!sample.HasScripts) problems.Add($"{name}: the sample has no scripts");
             if (target.IsEditor) problems.AddRange(InspectorTooltips.Check(runtime, package));
             report.Unit($"{name} Assembly-CSharp", version, target.Name, problems);
 

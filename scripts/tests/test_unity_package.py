@@ -585,7 +585,12 @@ def test_a_reference_missing_on_a_platform_fails(pkg):
                           "where its reference Mocap.Imu does not")
     assert problems_about(problems, "Tests/Runtime/Mocap.Imu.Tests.Runtime.asmdef",
                           "references Editor-only Mocap.Imu")
-    assert len(problems) == 2, problems
+    # ...and so do the samples' assemblies, limited to the same platforms.
+    for sample in ("LiveAvatar", "CapturePlayback", "VrAvatar", "MultiCharacter"):
+        rel = f"Samples~/{sample}/Mocap.Imu.Samples.{sample}.asmdef"
+        assert problems_about(problems, rel, "where its reference Mocap.Imu does not")
+        assert problems_about(problems, rel, "references Editor-only Mocap.Imu")
+    assert len(problems) == 10, problems
 
 
 @pytest.mark.parametrize("platforms,message", [
@@ -689,3 +694,91 @@ def test_the_engine_free_core_is_not_scanned(pkg):
 def test_test_assemblies_need_the_test_framework(pkg):
     dependencies(pkg, com__unity__test_framework=None)
     assert problems_about(lint(pkg), "package.json", "needs com.unity.test-framework")
+
+
+# ------------------------------------------------------------------------------ samples' asmdefs
+
+SAMPLES = ("LiveAvatar", "CapturePlayback", "VrAvatar", "MultiCharacter")
+
+
+def sample_asmdef(sample):
+    return f"Samples~/{sample}/Mocap.Imu.Samples.{sample}.asmdef"
+
+
+@pytest.mark.parametrize("sample", SAMPLES)
+def test_each_real_sample_is_an_assembly_limited_to_the_plugin_platforms(sample):
+    # Imported, a sample outside an asmdef would be Assembly-CSharp on every platform, where the
+    # package's assemblies it uses do not exist (an Android or iOS player build would not compile).
+    data = json.loads((REAL_PACKAGE / sample_asmdef(sample)).read_text())
+    assert data["name"] == f"Mocap.Imu.Samples.{sample}"
+    assert set(data["includePlatforms"]) == set(NATIVE) and data["excludePlatforms"] == []
+    assert set(data["references"]) == {"Mocap.Imu", "Mocap.Imu.Core"}
+    assert sorted(p.name for p in (REAL_PACKAGE / "Samples~" / sample).glob("*.asmdef")) == \
+        [f"Mocap.Imu.Samples.{sample}.asmdef"]
+
+
+def test_a_sample_asmdef_on_every_platform_fails(pkg):
+    rel = sample_asmdef("VrAvatar")
+    edit_json(pkg / rel, includePlatforms=[])
+    problems = lint(pkg)
+    engine_problems = problems_about(problems, rel, "needs the native engine")
+    assert all(p in engine_problems[0] for p in ("Android", "iOS", "WebGL")), engine_problems
+    assert problems_about(problems, rel, "where its reference Mocap.Imu does not")
+    assert all(rel in p for p in problems), problems
+
+
+def test_a_sample_asmdef_adding_a_platform_without_plugin_fails(pkg):
+    rel = sample_asmdef("LiveAvatar")
+    edit_json(pkg / rel, includePlatforms=NATIVE + ["Android"])
+    problems = lint(pkg)
+    assert problems_about(problems, rel, "compiles for Android, where no plugin is built")
+    assert problems_about(problems, rel, "compiles for Android, where its reference Mocap.Imu.Core")
+
+
+def test_a_sample_without_asmdef_using_the_package_fails(pkg):
+    (pkg / sample_asmdef("CapturePlayback")).unlink()
+    problems = lint(pkg)
+    assert problems_about(problems, "Samples~/CapturePlayback/CapturePlaybackBootstrap.cs",
+                          "uses Mocap.Imu outside an asmdef of its sample")
+    assert len(problems) == 1, problems
+    # Code that does not name the package, and editor scripts (Assembly-CSharp-Editor exists in
+    # the editor only), may stay outside an asmdef.
+    (pkg / "Samples~/CapturePlayback/CapturePlaybackBootstrap.cs").write_text(
+        "// Mocap.Imu is named in a comment only\n"
+        "public sealed class Plain : UnityEngine.MonoBehaviour { string s = \"Mocap.Imu\"; }\n")
+    (pkg / "Samples~/CapturePlayback/Editor").mkdir()
+    (pkg / "Samples~/CapturePlayback/Editor/Menu.cs").write_text(
+        "using Mocap.Imu;\nstatic class Menu { }\n")
+    assert lint(pkg) == []
+
+
+def test_a_sample_asmdef_in_an_editor_folder_must_be_editor_only(pkg):
+    folder = pkg / "Samples~/VrAvatar/Editor"
+    folder.mkdir()
+    rel = "Samples~/VrAvatar/Editor/Mocap.Imu.Samples.VrAvatar.Editor.asmdef"
+    edit_json(pkg / rel, name="Mocap.Imu.Samples.VrAvatar.Editor",
+              references=["Mocap.Imu.Samples.VrAvatar", "Mocap.Imu.Editor"], includePlatforms=NATIVE)
+    problems = lint(pkg)
+    assert problems_about(problems, rel, 'Editor assembly must have includePlatforms ["Editor"]')
+    assert problems_about(problems, rel, "references Editor-only Mocap.Imu.Editor")
+    edit_json(pkg / rel, includePlatforms=["Editor"])
+    assert lint(pkg) == []
+
+
+def test_a_sample_asmdef_references_the_package_or_its_own_sample_only(pkg):
+    rel = sample_asmdef("MultiCharacter")
+    mocap_imu_guid = guid_of(pkg, "Runtime/Mocap.Imu.asmdef")
+    edit_json(pkg / rel, references=["Mocap.Imu.Core", "GUID:" + mocap_imu_guid])
+    assert lint(pkg) == []
+    edit_json(pkg / rel, references=["Mocap.Imu.Core", "Mocap.Imu", "Mocap.Imu.Samples.LiveAvatar"])
+    assert problems_about(lint(pkg), rel, "is an asmdef of Samples~/LiveAvatar: a project may "
+                          "have imported this sample alone")
+    edit_json(pkg / rel, references=["Mocap.Imu.Core", "Mocap.Imu", "Mocap.Imu.Nope"])
+    assert problems_about(lint(pkg), rel, "'Mocap.Imu.Nope' resolves to no asmdef")
+
+
+@pytest.mark.parametrize("name", ["Mocap.Imu.Samples.LiveAvatar", "Mocap.Imu"])
+def test_a_sample_asmdef_name_must_be_unique(pkg, name):
+    rel = sample_asmdef("VrAvatar")
+    edit_json(pkg / rel, name=name)
+    assert problems_about(lint(pkg), rel, f"asmdef name {name!r} is also used by")
