@@ -14,8 +14,12 @@
  *  - Thread safety is stated per function. "Any thread" means the call may race with other calls
  *    on the same session from other threads; "one thread" means the caller serialises calls.
  *
- * Versioning: MOCAP_API_VERSION changes when a signature or struct layout changes.
- * mocap_api_version() returns the value the library was built with; compare it at load time.
+ * Versioning: major.minor. MOCAP_API_VERSION is the major version: it changes when a signature, a
+ * struct layout or the meaning of a value changes, and a binding must refuse a library of another
+ * major. A minor version (MOCAP_API_VERSION_MINOR) only adds: functions, enum values and counter
+ * keys (mocap_session_get_counter, mocap_solver_get_counter); existing structs never grow within
+ * a major, so new counters are keys. A binding built for M.m therefore accepts any library M.n with
+ * n >= m. mocap_api_version() and mocap_api_version_minor() return what the library was built with.
  */
 #ifndef MOCAP_IMU_H
 #define MOCAP_IMU_H
@@ -43,6 +47,7 @@ extern "C" {
 #endif
 
 #define MOCAP_API_VERSION 5
+#define MOCAP_API_VERSION_MINOR 1
 #define MOCAP_SENSOR_COUNT 6
 #define MOCAP_PATH_MAX 260
 
@@ -74,8 +79,10 @@ MOCAP_API const char *mocap_last_error(void);
 /* Short constant name of a status code, e.g. "MOCAP_ERR_NOT_FOUND". Any thread. */
 MOCAP_API const char *mocap_status_name(mocap_status status);
 
-/* MOCAP_API_VERSION of the built library. Any thread. */
+/* MOCAP_API_VERSION (the major version) of the built library. Any thread. */
 MOCAP_API int32_t mocap_api_version(void);
+/* MOCAP_API_VERSION_MINOR of the built library (absent before 5.1: read a missing symbol as 0). */
+MOCAP_API int32_t mocap_api_version_minor(void);
 
 /* "major.minor.patch" of the engine. Any thread. */
 MOCAP_API const char *mocap_version_string(void);
@@ -264,6 +271,30 @@ typedef struct mocap_session_stats {
 
 /* Any thread. */
 MOCAP_API mocap_status mocap_session_get_stats(mocap_session *session, mocap_session_stats *out);
+
+/* One counter of a session by key, as mocap_session_get_stats would report it. Keys are only ever
+ * added (a minor version); a key this library does not know is MOCAP_ERR_UNSUPPORTED, naming it. */
+typedef enum mocap_session_counter {
+    MOCAP_SESSION_BYTES_RECEIVED = 0,
+    MOCAP_SESSION_FRAMES_DECODED = 1,
+    MOCAP_SESSION_CRC_FAILURES = 2,
+    MOCAP_SESSION_BYTES_SKIPPED = 3,
+    MOCAP_SESSION_UNKNOWN_PACKETS = 4,
+    MOCAP_SESSION_SAMPLES_DECODED = 5,
+    MOCAP_SESSION_SAMPLES_REJECTED = 6,
+    MOCAP_SESSION_FRAMES_EMITTED = 7,
+    MOCAP_SESSION_FRAMES_DROPPED = 8,
+    MOCAP_SESSION_BYTES_DROPPED = 9,
+    MOCAP_SESSION_RECONNECTS = 10,
+    MOCAP_SESSION_CAPTURE_BYTES_WRITTEN = 11,
+    MOCAP_SESSION_REPLAY_CHUNKS_SKIPPED = 12,
+    MOCAP_SESSION_REPLAY_TAIL_DAMAGED = 13, /* 0 or 1 */
+    MOCAP_SESSION_SENSORS_SEEN_MASK = 14,
+    MOCAP_SESSION_COUNTER_COUNT = 15        /* the number of keys this header knows */
+} mocap_session_counter;
+/* Any thread. */
+MOCAP_API mocap_status mocap_session_get_counter(mocap_session *session, int32_t counter,
+                                                 uint64_t *out);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Calibration                                                                                 */
@@ -492,6 +523,27 @@ typedef struct mocap_solver_stats {
  * timings and the error texts are solver-wide either way). Any thread. */
 MOCAP_API mocap_status mocap_solver_get_stats(mocap_solver *solver, int32_t character,
                                               mocap_solver_stats *out);
+
+/* One solver counter by key (character -1 for the totals), as mocap_solver_get_stats would report
+ * it. Keys are only ever added; a key this library does not know is MOCAP_ERR_UNSUPPORTED. */
+typedef enum mocap_solver_counter {
+    MOCAP_SOLVER_TICKS = 0,
+    MOCAP_SOLVER_BATCHED_CALLS = 1,
+    MOCAP_SOLVER_MAX_BATCH = 2,
+    MOCAP_SOLVER_FRAMES_SOLVED = 3,
+    MOCAP_SOLVER_FRAMES_UNCALIBRATED = 4,
+    MOCAP_SOLVER_FRAMES_NONFINITE = 5,
+    MOCAP_SOLVER_OUTPUTS_NONFINITE = 6,
+    MOCAP_SOLVER_POSES_DROPPED = 7,
+    MOCAP_SOLVER_RUN_FAILURES = 8,
+    MOCAP_SOLVER_SOLVE_NS_TOTAL = 9,
+    MOCAP_SOLVER_SOLVE_NS_MAX = 10,
+    MOCAP_SOLVER_RUN_NS_TOTAL = 11,
+    MOCAP_SOLVER_COUNTER_COUNT = 12 /* the number of keys this header knows */
+} mocap_solver_counter;
+/* Any thread. */
+MOCAP_API mocap_status mocap_solver_get_counter(mocap_solver *solver, int32_t character,
+                                                int32_t counter, uint64_t *out);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Streaming and export: VMC protocol (OSC over UDP) and BVH files                              */

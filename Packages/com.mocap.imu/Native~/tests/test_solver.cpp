@@ -384,6 +384,64 @@ TEST_F(SolverOnShippedModel, ReplaySolvedEndToEnd)
         ASSERT_EQ(poses[0][i].frame_sequence, poses[0][i - 1].frame_sequence + 1) << i;
     check_poses(poses[0], info, 0);
     report_timing(solver.s, "1 character");
+
+    // The same counters by key (the replay has ended: nothing moves any more).
+    ASSERT_EQ(mocap_session_get_stats(sessions.list[0], &ss), MOCAP_OK);
+    const uint64_t session_expected[MOCAP_SESSION_COUNTER_COUNT] = {
+        ss.bytes_received, ss.frames_decoded, ss.crc_failures, ss.bytes_skipped, ss.unknown_packets,
+        ss.samples_decoded, ss.samples_rejected, ss.frames_emitted, ss.frames_dropped,
+        ss.bytes_dropped, ss.reconnects, ss.capture_bytes_written, ss.replay_chunks_skipped,
+        (uint64_t)ss.replay_tail_damaged, ss.sensors_seen_mask};
+    for (int32_t key = 0; key < MOCAP_SESSION_COUNTER_COUNT; ++key) {
+        uint64_t value = 12345;
+        ASSERT_EQ(mocap_session_get_counter(sessions.list[0], key, &value), MOCAP_OK) << key;
+        EXPECT_EQ(value, session_expected[key]) << "session counter " << key;
+    }
+    EXPECT_GT(session_expected[MOCAP_SESSION_BYTES_RECEIVED], 0u);
+    EXPECT_EQ(session_expected[MOCAP_SESSION_SENSORS_SEEN_MASK], 0x3Fu);
+    for (int32_t character : {-1, 0}) {
+        ASSERT_EQ(mocap_solver_get_stats(solver.s, character, &st), MOCAP_OK);
+        const uint64_t solver_expected[MOCAP_SOLVER_COUNTER_COUNT] = {
+            st.ticks, st.batched_calls, st.max_batch, st.frames_solved, st.frames_uncalibrated,
+            st.frames_nonfinite, st.outputs_nonfinite, st.poses_dropped, st.run_failures,
+            st.solve_ns_total, st.solve_ns_max, st.run_ns_total};
+        for (int32_t key = 0; key < MOCAP_SOLVER_COUNTER_COUNT; ++key) {
+            uint64_t value = 12345;
+            ASSERT_EQ(mocap_solver_get_counter(solver.s, character, key, &value), MOCAP_OK) << key;
+            EXPECT_EQ(value, solver_expected[key]) << "solver counter " << key << ", character " << character;
+        }
+        EXPECT_EQ(solver_expected[MOCAP_SOLVER_FRAMES_SOLVED], poses[0].size());
+    }
+}
+
+// Counters grow as keys: a key the library does not know is refused by name, not read as 0.
+TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion)
+{
+    std::string cap = test_temp_path("keys.cap");
+    synth_config cfg = short_capture(35, 1.0, "walk", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));
+    ASSERT_NE(sessions.list[0], nullptr);
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
+    uint64_t value = 7;
+    EXPECT_EQ(mocap_session_get_counter(sessions.list[0], MOCAP_SESSION_COUNTER_COUNT, &value),
+              MOCAP_ERR_UNSUPPORTED);
+    EXPECT_NE(std::string(mocap_last_error()).find("session counter 15 is not known"), std::string::npos)
+        << mocap_last_error();
+    EXPECT_NE(std::string(mocap_last_error()).find("API 5.1"), std::string::npos) << mocap_last_error();
+    EXPECT_EQ(value, 7u);
+    EXPECT_EQ(mocap_session_get_counter(sessions.list[0], -1, &value), MOCAP_ERR_UNSUPPORTED);
+    EXPECT_EQ(mocap_solver_get_counter(solver.s, -1, MOCAP_SOLVER_COUNTER_COUNT, &value), MOCAP_ERR_UNSUPPORTED);
+    EXPECT_NE(std::string(mocap_last_error()).find("solver counter 12 is not known"), std::string::npos)
+        << mocap_last_error();
+    EXPECT_EQ(mocap_session_get_counter(sessions.list[0], 0, nullptr), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(mocap_session_get_counter(nullptr, 0, &value), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(mocap_solver_get_counter(solver.s, 5, MOCAP_SOLVER_TICKS, &value), MOCAP_ERR_INVALID_ARGUMENT)
+        << "character 5 does not exist";
+    EXPECT_EQ(mocap_api_version_minor(), MOCAP_API_VERSION_MINOR);
 }
 
 // The poses of one replay solved with the given solver config (nullptr: defaults).
@@ -844,6 +902,7 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
     EXPECT_EQ(mocap_api_version(), 5);   // 5: replay damage in mocap_session_stats
+    EXPECT_EQ(mocap_api_version_minor(), 1);  // 5.1: counters by key
 }
 
 // A consumer that stops polling for longer than the pose ring holds gets the newest pose from

@@ -10,11 +10,26 @@ namespace Mocap.Imu
         /// <summary>"major.minor.patch" of the engine.</summary>
         public static string Version => NativeText.FromPointer(NativeMethods.mocap_version_string());
 
-        /// <summary>MOCAP_API_VERSION the library was built with.</summary>
+        /// <summary>MOCAP_API_VERSION (the major version) the library was built with.</summary>
         public static int ApiVersion => NativeMethods.mocap_api_version();
 
-        /// <summary>MOCAP_API_VERSION these bindings were written for.</summary>
+        /// <summary>MOCAP_API_VERSION (the major version) these bindings were written for.</summary>
         public static int BindingsApiVersion => NativeMethods.ApiVersion;
+
+        /// <summary>The library's major.minor API version (a library older than minor versions reads as minor 0).</summary>
+        public static ApiVersion LibraryApi
+        {
+            get
+            {
+                int minor;
+                try { minor = NativeMethods.mocap_api_version_minor(); }
+                catch (EntryPointNotFoundException) { minor = 0; }
+                return new ApiVersion(NativeMethods.mocap_api_version(), minor);
+            }
+        }
+
+        /// <summary>The major.minor API version these bindings were written for.</summary>
+        public static ApiVersion BindingsApi => new ApiVersion(NativeMethods.ApiVersion, NativeMethods.ApiMinorVersion);
 
         /// <summary>The engine's name of a segment, e.g. "left_wrist".</summary>
         public static string SegmentName(MocapSegment segment)
@@ -29,17 +44,15 @@ namespace Mocap.Imu
             NativeText.FromPointer(NativeMethods.mocap_status_name((int)status));
 
         /// <summary>
-        /// Throws when the loaded library was built for another API version: the struct
-        /// mirrors would then read garbage, so refuse before the first session opens.
+        /// Throws when the loaded library was built for another major API version (the struct
+        /// mirrors would read garbage) or an older minor one (functions the bindings call are
+        /// missing), so refuse before the first session opens.
         /// </summary>
         public static void EnsureCompatible()
         {
             if (_checked) return;
-            int version = ApiVersion;
-            if (version != NativeMethods.ApiVersion)
-                throw new MocapException(MocapStatus.Unsupported,
-                    $"the native library {NativeMethods.Library} has API version {version}, " +
-                    $"these bindings need {NativeMethods.ApiVersion}; rebuild or update the package");
+            var refusal = Mocap.Imu.ApiVersion.Refusal(BindingsApi, LibraryApi, NativeMethods.Library);
+            if (refusal != null) throw new MocapException(MocapStatus.Unsupported, refusal);
             _checked = true;
         }
     }

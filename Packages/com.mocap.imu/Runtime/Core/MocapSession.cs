@@ -207,6 +207,18 @@ namespace Mocap.Imu
         }
 
         /// <summary>
+        /// One counter by key, as <see cref="GetStats"/> reports it: counters added in later minor
+        /// API versions are keys, not new struct fields. Throws <see cref="MocapException"/>
+        /// (Unsupported) for a key the loaded library does not know. Allocates nothing.
+        /// </summary>
+        public unsafe ulong GetCounter(SessionCounter counter)
+        {
+            ulong value;
+            NativeMethods.Check(NativeMethods.mocap_session_get_counter(Handle, (int)counter, &value));
+            return value;
+        }
+
+        /// <summary>
         /// Schedule a calibration step over [startSeconds, startSeconds + durationSeconds] of the
         /// session clock (frame time; a replay's clock is its recorded receive time). Steps
         /// queue (up to 8), so a replay's heading and T-pose windows can both be scheduled

@@ -252,6 +252,18 @@ namespace Mocap.Imu
         }
 
         /// <summary>
+        /// One solver counter by key (<paramref name="character"/> -1: the totals), as
+        /// <see cref="GetStats"/> reports it. Throws <see cref="MocapException"/> (Unsupported) for a
+        /// key the loaded library does not know. Allocates nothing.
+        /// </summary>
+        public unsafe ulong GetCounter(SolverCounter counter, int character = -1)
+        {
+            ulong value;
+            NativeMethods.Check(NativeSolverMethods.mocap_solver_get_counter(Handle, character, (int)counter, &value));
+            return value;
+        }
+
+        /// <summary>
         /// Stop the inference thread and free the solver. The sessions and the model stay open
         /// (their owners dispose them) and the sessions may be polled directly again.
         /// </summary>

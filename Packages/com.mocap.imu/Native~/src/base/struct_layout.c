@@ -8,6 +8,7 @@
 #endif
 
 int32_t mocap_api_version(void) { return MOCAP_API_VERSION; }
+int32_t mocap_api_version_minor(void) { return MOCAP_API_VERSION_MINOR; }
 const char *mocap_version_string(void) { return MOCAP_VERSION_STRING; }
 
 #define STRUCT_ROW(type) {#type, "", 0, (uint32_t)sizeof(type)}

@@ -26,8 +26,11 @@ namespace Mocap.Imu
         /// </summary>
         internal const string Library = "mocap_imu";
 
-        /// <summary>MOCAP_API_VERSION these bindings mirror.</summary>
+        /// <summary>MOCAP_API_VERSION (major) these bindings mirror.</summary>
         internal const int ApiVersion = 5;
+
+        /// <summary>MOCAP_API_VERSION_MINOR these bindings need at least.</summary>
+        internal const int ApiMinorVersion = 1;
 
         internal const int SensorCount = 6;
         internal const int PathMax = 260;
@@ -42,6 +45,9 @@ namespace Mocap.Imu
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern int mocap_api_version();
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern int mocap_api_version_minor();
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern IntPtr mocap_version_string();
@@ -78,6 +84,10 @@ namespace Mocap.Imu
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_session_get_stats(SessionHandle session,
                                                                    MocapSessionStats* stats);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_session_get_counter(SessionHandle session, int counter,
+                                                                     ulong* value);
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_calibration_schedule(SessionHandle session,

@@ -66,5 +66,9 @@ namespace Mocap.Imu
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_solver_get_stats(SolverHandle solver, int character,
                                                                   MocapSolverStats* stats);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_solver_get_counter(SolverHandle solver, int character, int counter,
+                                                                    ulong* value);
     }
 }
