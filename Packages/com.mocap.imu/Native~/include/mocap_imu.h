@@ -388,6 +388,12 @@ MOCAP_API mocap_status mocap_calibration_load(const char *path, mocap_calibratio
 #define MOCAP_JOINT_COUNT 24
 #define MOCAP_MAX_CHARACTERS 64
 
+/* The Unity humanoid bone (a HumanBodyBones name: "Hips", "LeftShoulder" ...) that SMPL joint
+ * `joint` (0..MOCAP_JOINT_COUNT-1, the contract order) drives, or NULL for the two hand end
+ * points (left_hand, right_hand) and outside the range. The one SMPL -> humanoid map: the VMC
+ * stream and the C# Humanoid driver both use it. Any thread; the text is static. */
+MOCAP_API const char *mocap_humanoid_bone_name(int32_t joint);
+
 typedef enum mocap_execution_provider {
     MOCAP_PROVIDER_CPU = 0,
     MOCAP_PROVIDER_CUDA = 1   /* needs a CUDA build of ONNX Runtime and a GPU; refused clearly otherwise */

@@ -499,3 +499,26 @@ TEST(BvhExport, PublicApiWritesFramesAndFrameTime)
     EXPECT_NE(mocap_bvh_open("/nonexistent-dir/x.bvh", &info, nullptr, &w), MOCAP_OK);
     EXPECT_NE(std::string(mocap_last_error()).find("/nonexistent-dir/x.bvh"), std::string::npos);
 }
+
+// One SMPL -> humanoid map: the public one (which C# reads) is the VMC stream's, joint for joint,
+// and the two hand end points drive no bone.
+TEST(Vmc, PublicHumanoidMapIsTheOneTheStreamUses)
+{
+    for (int j = 0; j < VMC_BONE_COUNT; ++j) {
+        const char *joint = nullptr, *bone = nullptr;
+        vmc_bone_pair(j, &joint, &bone);
+        ASSERT_NE(mocap_humanoid_bone_name(j), nullptr) << j;
+        EXPECT_STREQ(mocap_humanoid_bone_name(j), bone) << joint;
+        EXPECT_STREQ(vmc_bone_name(joint), bone) << joint;
+    }
+    EXPECT_STREQ(mocap_humanoid_bone_name(0), "Hips");
+    EXPECT_STREQ(mocap_humanoid_bone_name(13), "LeftShoulder");   // left_collar
+    EXPECT_STREQ(mocap_humanoid_bone_name(16), "LeftUpperArm");   // left_shoulder
+    EXPECT_STREQ(mocap_humanoid_bone_name(11), "RightToes");      // right_foot
+    EXPECT_EQ(mocap_humanoid_bone_name(22), nullptr);             // left_hand: the knuckles
+    EXPECT_EQ(mocap_humanoid_bone_name(23), nullptr);
+    EXPECT_EQ(mocap_humanoid_bone_name(-1), nullptr);
+    EXPECT_EQ(mocap_humanoid_bone_name(MOCAP_JOINT_COUNT), nullptr);
+    EXPECT_EQ(vmc_bone_name("left_hand"), nullptr);
+    EXPECT_EQ(vmc_bone_name("not_a_joint"), nullptr);
+}

@@ -7,47 +7,21 @@
 
 #include "error.h"
 #include "osc_encoder.h"
+#include "smpl_skeleton.h"
 #include "udp_sender.h"
 
-/* SMPL joint -> HumanBodyBones, in the SMPL-24 joint order. */
-static const char *const BONES[VMC_BONE_COUNT][2] = {
-    {"pelvis", "Hips"},
-    {"left_hip", "LeftUpperLeg"},
-    {"right_hip", "RightUpperLeg"},
-    {"spine1", "Spine"},
-    {"left_knee", "LeftLowerLeg"},
-    {"right_knee", "RightLowerLeg"},
-    {"spine2", "Chest"},
-    {"left_ankle", "LeftFoot"},
-    {"right_ankle", "RightFoot"},
-    {"spine3", "UpperChest"},
-    {"left_foot", "LeftToes"},
-    {"right_foot", "RightToes"},
-    {"neck", "Neck"},
-    {"left_collar", "LeftShoulder"},
-    {"right_collar", "RightShoulder"},
-    {"head", "Head"},
-    {"left_shoulder", "LeftUpperArm"},
-    {"right_shoulder", "RightUpperArm"},
-    {"left_elbow", "LeftLowerArm"},
-    {"right_elbow", "RightLowerArm"},
-    {"left_wrist", "LeftHand"},
-    {"right_wrist", "RightHand"},
-};
-
+/* The first VMC_BONE_COUNT joints of the SMPL-24 order are those that drive a humanoid bone. */
 const char *vmc_bone_name(const char *smpl_joint)
 {
-    if (!smpl_joint) return NULL;
-    for (int i = 0; i < VMC_BONE_COUNT; ++i)
-        if (strcmp(BONES[i][0], smpl_joint) == 0) return BONES[i][1];
-    return NULL;
+    int j = smpl_joint_index(smpl_joint);
+    return j >= 0 && j < VMC_BONE_COUNT ? smpl_humanoid_bone(j) : NULL;
 }
 
 void vmc_bone_pair(int i, const char **smpl_joint, const char **bone)
 {
     int ok = i >= 0 && i < VMC_BONE_COUNT;
-    if (smpl_joint) *smpl_joint = ok ? BONES[i][0] : NULL;
-    if (bone) *bone = ok ? BONES[i][1] : NULL;
+    if (smpl_joint) *smpl_joint = ok ? smpl_joint_name(i) : NULL;
+    if (bone) *bone = ok ? smpl_humanoid_bone(i) : NULL;
 }
 
 void vmc_position_to_unity(const float model[3], float unity[3])
@@ -100,7 +74,7 @@ size_t vmc_encode_pose(uint8_t *buf, size_t cap, const mocap_model_info *info,
     for (int i = 0; i < VMC_BONE_COUNT; ++i) {
         joint_of[i] = -1;
         for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
-            if (strncmp(info->joint_names[j], BONES[i][0], sizeof info->joint_names[j]) == 0) {
+            if (strncmp(info->joint_names[j], smpl_joint_name(i), sizeof info->joint_names[j]) == 0) {
                 joint_of[i] = j;
                 found++;
                 break;
@@ -141,7 +115,7 @@ size_t vmc_encode_pose(uint8_t *buf, size_t cap, const mocap_model_info *info,
         if (j < 0) continue;
         vmc_position_to_unity(info->rest_offsets[j], p);
         vmc_rotation_to_unity(pose->joint_rotations[j], q);
-        put_transform(&w, "/VMC/Ext/Bone/Pos", BONES[i][1], p, q);
+        put_transform(&w, "/VMC/Ext/Bone/Pos", smpl_humanoid_bone(i), p, q);
         n++;
     }
     osc_bundle_end(&w);

@@ -14,6 +14,7 @@
 
 #include "error.h"
 #include "platform.h"
+#include "smpl_skeleton.h"
 #include "text_number.h"
 
 void ort_options_defaults(ort_options *o)
@@ -197,14 +198,6 @@ const char *ort_library_path(void) { return g_loaded ? g_path : ""; }
 /* ---------------------------------------------------------------------------------------- */
 /* The contract                                                                                */
 
-static const char *const CONTRACT_JOINTS[ORT_JOINTS] = {
-    "pelvis",      "left_hip",     "right_hip",     "spine1",        "left_knee",  "right_knee",
-    "spine2",      "left_ankle",   "right_ankle",   "spine3",        "left_foot",  "right_foot",
-    "neck",        "left_collar",  "right_collar",  "head",          "left_shoulder",
-    "right_shoulder", "left_elbow", "right_elbow",  "left_wrist",    "right_wrist", "left_hand",
-    "right_hand"};
-static const int CONTRACT_PARENTS[ORT_JOINTS] = {-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8,
-                                                 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21};
 static const char *const CONTRACT_SENSORS = "pelvis,left_wrist,right_wrist,left_shin,right_shin,head";
 
 enum { DIM_DYNAMIC = -1, DIM_LAYERS = -2, DIM_STATE = -3 };
@@ -404,9 +397,9 @@ static mocap_status read_metadata(ort_model *m)
         goto done;
     }
     for (int j = 0; j < ORT_JOINTS; ++j) {
-        if (strcmp(items[j], CONTRACT_JOINTS[j]) != 0) {
+        if (strcmp(items[j], smpl_joint_name(j)) != 0) {
             r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.joint_names[%d] is '%s', the "
-                           "contract has '%s'", path, j, items[j], CONTRACT_JOINTS[j]);
+                           "contract has '%s'", path, j, items[j], smpl_joint_name(j));
             goto done;
         }
         snprintf(info->joint_names[j], ORT_NAME_CAP, "%s", items[j]);
@@ -419,10 +412,10 @@ static mocap_status read_metadata(ort_model *m)
     }
     for (int j = 0; j < ORT_JOINTS; ++j) {
         long p;
-        if (!parse_int(items[j], &p) || p != CONTRACT_PARENTS[j]) {
+        if (!parse_int(items[j], &p) || p != smpl_joint_parent(j)) {
             r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.joint_parents[%d] (%s) is '%s', "
-                           "the contract has %d", path, j, CONTRACT_JOINTS[j], items[j],
-                           CONTRACT_PARENTS[j]);
+                           "the contract has %d", path, j, smpl_joint_name(j), items[j],
+                           smpl_joint_parent(j));
             goto done;
         }
         info->joint_parents[j] = (int)p;

@@ -50,6 +50,9 @@ namespace Mocap.Imu
         internal static extern int mocap_api_version_minor();
 
         [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern IntPtr mocap_humanoid_bone_name(int joint);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern IntPtr mocap_version_string();
 
         [DllImport(Library, CallingConvention = Cdecl)]

@@ -24,15 +24,9 @@ namespace Mocap.Imu.Skeleton
         /// <summary>Number of SMPL joints that drive a bone (all but the two hand end points).</summary>
         public const int MappedJointCount = 22;
 
-        private static readonly HumanBone[] JointToBone =
-        {
-            HumanBone.Hips, HumanBone.LeftUpperLeg, HumanBone.RightUpperLeg, HumanBone.Spine,
-            HumanBone.LeftLowerLeg, HumanBone.RightLowerLeg, HumanBone.Chest, HumanBone.LeftFoot,
-            HumanBone.RightFoot, HumanBone.UpperChest, HumanBone.LeftToes, HumanBone.RightToes,
-            HumanBone.Neck, HumanBone.LeftShoulder, HumanBone.RightShoulder, HumanBone.Head,
-            HumanBone.LeftUpperArm, HumanBone.RightUpperArm, HumanBone.LeftLowerArm, HumanBone.RightLowerArm,
-            HumanBone.LeftHand, HumanBone.RightHand, HumanBone.LastBone, HumanBone.LastBone,
-        };
+        // The engine owns the map (mocap_humanoid_bone_name): the VMC stream and this driver must
+        // never disagree on which bone a joint turns.
+        private static readonly HumanBone[] JointToBone = ReadEngineMap();
 
         // The joint that continues each joint's bone along the body: the end point that gives a
         // bone its direction when several children exist (spine3 -> neck, not the collars) and the
@@ -108,6 +102,32 @@ namespace Mocap.Imu.Skeleton
             if (j < 0 || j >= SmplSkeleton.JointCount)
                 throw new ArgumentOutOfRangeException(nameof(j), j, "SMPL joint index must be 0..23");
             return j;
+        }
+
+        private static HumanBone[] ReadEngineMap()
+        {
+            var map = new HumanBone[SmplSkeleton.JointCount];
+            int mapped = 0;
+            for (int j = 0; j < map.Length; j++)
+            {
+                IntPtr text;
+                try { text = NativeMethods.mocap_humanoid_bone_name(j); }
+                catch (EntryPointNotFoundException)
+                {
+                    throw new MocapException(MocapStatus.Unsupported,
+                        $"the native library {NativeMethods.Library} has no mocap_humanoid_bone_name (API 5.1 or newer needed)");
+                }
+                if (text == IntPtr.Zero) { map[j] = HumanBone.LastBone; continue; }
+                string name = NativeText.FromPointer(text);
+                if (!TryParse(name, out map[j]))
+                    throw new MocapException(MocapStatus.Format,
+                        $"the engine maps SMPL joint {j} to '{name}', which is no humanoid bone");
+                mapped++;
+            }
+            if (mapped != MappedJointCount)
+                throw new MocapException(MocapStatus.Format,
+                    $"the engine maps {mapped} SMPL joints to humanoid bones; these bindings expect {MappedJointCount}");
+            return map;
         }
 
         private static int[] BuildBoneToJoint()
