@@ -85,6 +85,17 @@ namespace Mocap.Imu
             config.CapturePath = capturePath ?? string.Empty;
             return config;
         }
+
+        /// <summary>This source as one character of a runner's plan. Main thread (paths resolve through Application).</summary>
+        public MocapRunCharacter ToRunCharacter() => new MocapRunCharacter
+        {
+            Name = name,
+            Config = ToSessionConfig(0f, null),
+            CalibrationFile = string.IsNullOrEmpty(calibrationFile) ? null : MocapSettings.ResolvePath(calibrationFile),
+            PlaybackWindows = source == MocapSourceKind.Replay && playbackCalibrationWindows
+                ? new PlaybackCalibrationWindows(playbackHeadingStart, playbackHeadingSeconds, playbackTPoseStart, playbackTPoseSeconds)
+                : (PlaybackCalibrationWindows?)null,
+        };
     }
 
     /// <summary>
