@@ -283,11 +283,22 @@ def main(args) -> int:
         if not getattr(args, "no_mirror", False):
             net = MirrorEnsemble(net).eval()
             name += " mirror-averaged"
-        name += f" step {ck.get('step', '?')}"
+        name += checkpoint_label(ck)
     info = export(net, getattr(args, "out", None) or DEFAULT_OUT, model_name=name,
                   check=not getattr(args, "no_check", False))
     print(json.dumps(info, indent=1))
     return 0
+
+
+def checkpoint_label(ck: dict) -> str:
+    """Where the weights come from, for the model name: a training step, or an average of
+    checkpoints (which has no step of its own)."""
+    if ck.get("step") is not None:
+        return f" step {ck['step']}"
+    sources = ck.get("averaged_from") or []
+    if sources:
+        return f" average of {len(sources)} checkpoints"
+    return ""
 
 
 def add_arguments(parser) -> None:

@@ -224,6 +224,23 @@ def test_export_cli_ships_the_mirror_averaged_pair_unless_told_not_to(tmp_path):
         assert meta["mocap.model_name"].endswith("step 7")
 
 
+def test_an_averaged_checkpoint_is_named_as_an_average_never_step_none(tmp_path):
+    import onnx
+    torch.manual_seed(0)
+    cfg = ModelConfig(embed=16, hidden=8, layers=1, head=16)
+    ckpt = tmp_path / "avg.pt"
+    torch.save({"model": PoseNet(cfg).state_dict(), "config": cfg.to_dict(), "step": None, "best": None,
+                "averaged_from": ["a.pt", "b.pt", "c.pt"]}, ckpt)
+    parser = argparse.ArgumentParser()
+    export.add_arguments(parser)
+    out = tmp_path / "avg"
+    assert export.main(parser.parse_args(["--checkpoint", str(ckpt), "--out", str(out), "--no-check"])) == 0
+    name = {p.key: p.value for p in onnx.load(str(out / export.FP32_NAME)).metadata_props}["mocap.model_name"]
+    assert "None" not in name and "?" not in name
+    assert name.endswith("mirror-averaged average of 3 checkpoints")
+    assert export.checkpoint_label({}) == ""
+
+
 def test_wrist_sensor_option_reaches_training_and_moves_a_hand_model_to_the_forearm(tmp_path):
     args = argparse.Namespace(wrist_sensor="forearm", smoke=True)
     cfg = tr.config_from_args(args)
@@ -681,3 +698,13 @@ def test_data_workers_refuse_a_shared_memory_too_small_for_their_buffers(tmp_pat
     with pytest.raises(tr.UsageError, match=r"needs \d+ MB of shared memory for its batch buffers, /dev/shm has 0 MB free"):
         tr.make_batcher(_motions(2, 0), cfg, np.random.default_rng(0))
     tr._require_shared_memory(10_000)   # fits in 40 kB
+
+
+def test_the_shipped_models_say_where_their_weights_come_from():
+    import onnx
+    for name in (export.FP32_NAME, export.FP16_NAME):
+        path = export.DEFAULT_OUT / name
+        meta = {p.key: p.value for p in onnx.load(str(path), load_external_data=False).metadata_props}
+        label = meta["mocap.model_name"]
+        assert label.startswith("mocap-pose lstm"), label
+        assert "None" not in label and not label.endswith("?"), f"{path}: {label}"
