@@ -18,7 +18,7 @@
 #include <termios.h>
 #include <unistd.h>
 
-#include "../tools/mocapctl_options.h"
+#include "../tools/mocapctl/options.h"
 #include "e2e_support.h"
 #include "test_support.h"
 
@@ -256,9 +256,9 @@ TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
     EXPECT_FALSE(std::filesystem::exists(dir + "/r.cap")) << "a refused record left a capture";
     EXPECT_FALSE(std::filesystem::exists("--seconds"));
     // Asked for, the usage is an answer: stdout, status 0; after a mistake, stderr and 2.
-    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " --help 2>/dev/null)");
+    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " replay --help 2>/dev/null)");
     EXPECT_EQ(help.exit_code, 0);
-    EXPECT_NE(help.output.find("mocapctl replay CAPTURE"), std::string::npos) << help.output;
+    EXPECT_NE(help.output.find("usage: mocapctl replay CAPTURE"), std::string::npos) << help.output;
     CommandResult wrong = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " frobnicate 2>/dev/null)");
     EXPECT_EQ(wrong.exit_code, 2);
     EXPECT_EQ(wrong.output.find("usage"), std::string::npos) << wrong.output;
@@ -297,52 +297,185 @@ TEST(Mocapctl, UnknownOptionsAreRefusedBeforeTheCommandRuns)
     ASSERT_EQ(run_command("synth --seconds 1 --out " + dir + "/a.cap --truth " + dir + "/t.csv").exit_code, 0);
     CommandResult negative = run_command("synth --out " + dir + "/b.cap --seconds -1");
     EXPECT_NE(negative.output.find("--seconds -1 is outside"), std::string::npos) << negative.output;
-    // `--help` after a command is an answer too, but not as the value of an option.
+    // `--help` after a command is an answer too (that command's usage), but not as the value of
+    // an option.
     CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " replay --help 2>/dev/null)");
     EXPECT_EQ(help.exit_code, 0);
-    EXPECT_NE(help.output.find("mocapctl stream --vmc"), std::string::npos) << help.output;
+    EXPECT_NE(help.output.find("usage: mocapctl replay CAPTURE"), std::string::npos) << help.output;
+    EXPECT_EQ(help.output.find("mocapctl stream"), std::string::npos) << help.output;
     CommandResult named = run_shell("cd '" + dir + "' && " + std::string(MOCAP_MOCAPCTL) +
                                     " synth --out -h --seconds 1");
     EXPECT_EQ(named.exit_code, 0) << named.output;
     EXPECT_TRUE(std::filesystem::exists(dir + "/-h")) << named.output;
 }
 
-// The options `mocapctl --help` shows, per command, keyed as mocapctl_options.h's table is
-// ("bench decode", and "bench" for the model benches).
-static std::map<std::string, std::set<std::string>> usage_text_options(std::string *help_text)
+namespace {
+
+// The options each command accepts, as main.c's table gives them (options.h).
+const struct {
+    const char *command, *options;
+} accepted_options[] = {
+    {"synth", MOCAPCTL_SYNTH_OPTIONS},
+    {"replay", MOCAPCTL_REPLAY_OPTIONS},
+    {"live", MOCAPCTL_LIVE_OPTIONS},
+    {"record", MOCAPCTL_RECORD_OPTIONS},
+    {"stream", MOCAPCTL_STREAM_OPTIONS},
+    {"bench decode", MOCAPCTL_BENCH_DECODE_OPTIONS},
+    {"bench", MOCAPCTL_BENCH_OPTIONS},
+    {"infer", MOCAPCTL_INFER_OPTIONS},
+    {"model-info", MOCAPCTL_MODEL_INFO_OPTIONS},
+    {"version", MOCAPCTL_VERSION_OPTIONS},
+};
+
+std::set<std::string> accepted_by(const std::string &command)
 {
-    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " --help 2>/dev/null)");
-    EXPECT_EQ(help.exit_code, 0);
-    *help_text = help.output;
-    std::map<std::string, std::set<std::string>> shown;
-    std::string command;
-    std::istringstream lines(help.output);
-    const std::regex option("--[a-z][a-z-]*");
-    for (std::string line; std::getline(lines, line);) {
-        const size_t at = line.find("mocapctl ");
-        if (at != std::string::npos) {
-            std::istringstream words(line.substr(at + 9));
-            std::string first, second;
-            words >> first >> second;
-            command = first == "bench" && second.rfind("decode", 0) == 0 ? "bench decode" : first;
+    std::set<std::string> names;
+    for (const auto &entry : accepted_options) {
+        if (command != entry.command) continue;
+        std::istringstream words(entry.options);
+        for (std::string name; words >> name;) {
+            if (name.back() == '=') name.pop_back();
+            names.insert(name);
         }
-        if (command.empty()) continue;
-        for (std::sregex_iterator it(line.begin(), line.end(), option), end; it != end; ++it)
-            shown[command].insert(it->str());
     }
+    return names;
+}
+
+// The commands `mocapctl help` lists: "  NAME   summary" lines after "commands:" (NAME may be
+// two words, "bench decode"), in order, with their summaries.
+std::vector<std::pair<std::string, std::string>> listed_commands(const std::string &overview)
+{
+    std::vector<std::pair<std::string, std::string>> listed;
+    const std::regex line_form("^  ([a-z][a-z-]*(?: [a-z]+)?)  +(\\S.*)$");
+    std::istringstream lines(overview);
+    bool in_list = false;
+    for (std::string line; std::getline(lines, line);) {
+        if (line == "commands:") in_list = true;
+        std::smatch m;
+        if (in_list && std::regex_match(line, m, line_form)) listed.emplace_back(m[1], m[2]);
+    }
+    return listed;
+}
+
+// The options a text shows (every "--name"; --help is every command's).
+std::set<std::string> options_shown(const std::string &text)
+{
+    std::set<std::string> shown;
+    const std::regex option("--[a-z][a-z-]*");
+    for (std::sregex_iterator it(text.begin(), text.end(), option), end; it != end; ++it)
+        if (it->str() != "--help") shown.insert(it->str());
     return shown;
 }
 
-// Every option the usage text shows is one its command takes: the list that refuses unknown
+// `mocapctl COMMAND --help` (stdout only) of every command the overview lists, by name.
+std::map<std::string, CommandResult> every_command_help(std::string *overview)
+{
+    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " help 2>/dev/null)");
+    EXPECT_EQ(help.exit_code, 0);
+    *overview = help.output;
+    std::map<std::string, CommandResult> helps;
+    for (const auto &listed : listed_commands(help.output))
+        helps[listed.first] = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " " + listed.first +
+                                        " --help 2>/dev/null)");
+    return helps;
+}
+
+}  // namespace
+
+// `mocapctl help` and `mocapctl --help` are the overview: every command of the table on a line
+// of its own with a one-line summary, and none of the commands' options (those are each
+// command's own --help).
+TEST(Mocapctl, HelpListsEveryCommandWithASummary)
+{
+    CommandResult help = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " help 2>/dev/null)");
+    CommandResult dashed = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " --help 2>/dev/null)");
+    EXPECT_EQ(help.exit_code, 0);
+    EXPECT_EQ(dashed.exit_code, 0);
+    EXPECT_EQ(help.output, dashed.output);
+    std::vector<std::string> names;
+    for (const auto &[name, summary] : listed_commands(help.output)) {
+        names.push_back(name);
+        EXPECT_GT(summary.size(), 10u) << name << ": " << summary;
+    }
+    std::vector<std::string> table;
+    for (const auto &entry : accepted_options) table.push_back(entry.command);
+    EXPECT_EQ(names, table) << help.output;
+    EXPECT_EQ(options_shown(help.output), std::set<std::string>{}) << help.output;
+    // Without a command, the overview is the usage error's message.
+    CommandResult bare = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " 2>&1 >/dev/null)");
+    EXPECT_EQ(bare.exit_code, 2);
+    EXPECT_EQ(bare.output, help.output);
+}
+
+// `mocapctl COMMAND --help` is that command's usage: on stdout with status 0, naming the command,
+// showing options it takes and none it does not take (another command's).
+TEST(Mocapctl, ACommandsHelpShowsItsOwnOptionsAndNoOther)
+{
+    std::string overview;
+    std::map<std::string, CommandResult> helps = every_command_help(&overview);
+    ASSERT_EQ(helps.size(), std::size(accepted_options)) << overview;
+    for (const auto &[command, help] : helps) {
+        EXPECT_EQ(help.exit_code, 0) << command;
+        EXPECT_EQ(help.output.rfind("usage: mocapctl " + command, 0), 0u) << command << "\n" << help.output;
+        const std::set<std::string> accepted = accepted_by(command);
+        for (const std::string &option : options_shown(help.output))
+            EXPECT_EQ(accepted.count(option), 1u)
+                << "mocapctl " << command << " --help shows " << option << ", which "
+                << command << " does not take:\n" << help.output;
+        for (const auto &other : accepted_options) {
+            const std::string name = other.command;
+            if (name == command || command.rfind(name + " ", 0) == 0) continue;
+            EXPECT_EQ(help.output.find("mocapctl " + name + " "), std::string::npos)
+                << command << "'s help shows " << name << "'s usage:\n" << help.output;
+        }
+    }
+    // Options that are one command's only, in its help and not in the others'.
+    const std::pair<const char *, const char *> own[] = {
+        {"synth", "--trajectory"}, {"replay", "--metrics-json"}, {"live", "--pose"},
+        {"stream", "--vmc"},       {"bench", "--max-characters"}, {"infer", "--provider"},
+    };
+    for (const auto &[command, option] : own) {
+        for (const auto &[name, help] : helps) {
+            const bool shown = options_shown(help.output).count(option) == 1;
+            EXPECT_EQ(shown, name == command) << option << " in mocapctl " << name << " --help:\n"
+                                              << help.output;
+        }
+    }
+    // `mocapctl help COMMAND` says the same; `bench decode` is a command of its own.
+    CommandResult topic = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " help stream 2>/dev/null)");
+    EXPECT_EQ(topic.exit_code, 0);
+    EXPECT_EQ(topic.output, helps["stream"].output);
+    EXPECT_EQ(options_shown(helps["bench decode"].output), std::set<std::string>{"--seconds"});
+}
+
+// An unknown command is named, with where the commands are listed, on stderr with status 2;
+// nothing else is printed (no usage to scroll past).
+TEST(Mocapctl, AnUnknownCommandIsNamed)
+{
+    const std::string expected = "mocapctl: unknown command 'frob' (mocapctl help lists them)\n";
+    for (const std::string &args : {std::string("frob"), std::string("frob --out x.cap"),
+                                    std::string("help frob")}) {
+        CommandResult stderr_only =
+            run_shell("(" + std::string(MOCAP_MOCAPCTL) + " " + args + " 2>&1 >/dev/null)");
+        EXPECT_EQ(stderr_only.exit_code, 2) << args;
+        EXPECT_EQ(stderr_only.output, expected) << args;
+        CommandResult stdout_only =
+            run_shell("(" + std::string(MOCAP_MOCAPCTL) + " " + args + " 2>/dev/null)");
+        EXPECT_EQ(stdout_only.output, "") << args;
+    }
+    EXPECT_FALSE(std::filesystem::exists("x.cap"));
+}
+
+// Every option a command's help shows is one it takes when run: the list that refuses unknown
 // options and the help users read cannot drift apart.
 TEST(Mocapctl, EveryOptionInTheUsageTextIsAccepted)
 {
-    std::string help;
+    std::string overview;
     size_t tried = 0;
-    for (const auto &[command, options] : usage_text_options(&help)) {
+    for (const auto &[command, help] : every_command_help(&overview)) {
         // "bench" alone is the usage error of a missing bench name; latency takes the model options.
         const std::string words = command == "bench" ? "bench latency" : command;
-        for (const std::string &option : options) {
+        for (const std::string &option : options_shown(help.output)) {
             // Only the option check runs: every command needs more than this one option, so each
             // stops at its own usage error (or a missing value) without doing anything.
             CommandResult r = run_shell("timeout 20 " + std::string(MOCAP_MOCAPCTL) + " " + words +
@@ -352,25 +485,25 @@ TEST(Mocapctl, EveryOptionInTheUsageTextIsAccepted)
             ++tried;
         }
     }
-    EXPECT_GT(tried, 50u) << help;
+    EXPECT_GT(tried, 50u) << overview;
 }
 
-// ... and every option a command accepts is one its usage text shows: none is hidden from users.
+// ... and every option a command accepts is one its help shows: none is hidden from users.
 TEST(Mocapctl, EveryAcceptedOptionIsInTheUsageText)
 {
-    std::string help;
-    std::map<std::string, std::set<std::string>> shown = usage_text_options(&help);
+    std::string overview;
+    std::map<std::string, CommandResult> helps = every_command_help(&overview);
     size_t checked = 0;
-    for (const auto &entry : mocapctl_command_options) {
-        std::istringstream names(entry.options);
-        for (std::string name; names >> name; ++checked) {
-            if (name.back() == '=') name.pop_back();
-            EXPECT_EQ(shown[entry.command].count(name), 1u)
-                << "mocapctl " << entry.command << " accepts " << name
-                << " but its usage text does not show it:\n" << help;
+    for (const auto &entry : accepted_options) {
+        const std::set<std::string> shown = options_shown(helps[entry.command].output);
+        for (const std::string &name : accepted_by(entry.command)) {
+            EXPECT_EQ(shown.count(name), 1u) << "mocapctl " << entry.command << " accepts " << name
+                                             << " but its help does not show it:\n"
+                                             << helps[entry.command].output;
+            ++checked;
         }
     }
-    EXPECT_GT(checked, 50u);
+    EXPECT_GT(checked, 50u) << overview;
 }
 
 // A command blocked in I/O (here: opening a named pipe nobody reads) cannot act on the first

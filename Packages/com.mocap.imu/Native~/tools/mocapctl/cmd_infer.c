@@ -35,6 +35,7 @@
 #include "onnx_runtime.h"
 #include "platform.h"
 #include "cli_args.h"
+#include "commands.h"
 
 #define BUNDLE_MAGIC "MOCAPTNS"
 #define BUNDLE_VERSION 1u
@@ -236,14 +237,9 @@ static void print_info(const char *path, const ort_model_info *info)
                info->rest_offsets[j][2]);
 }
 
-int mocapctl_onnx(const char *cmd, int argc, char **argv);
-
-static int cmd_model_info(int argc, char **argv)
+int cmd_model_info(int argc, char **argv)
 {
-    if (argc < 1 || argv[0][0] == '-') {
-        fprintf(stderr, "usage: mocapctl model-info M.onnx [--ort LIBONNXRUNTIME]\n");
-        return 2;
-    }
+    if (argc < 1 || argv[0][0] == '-') return mocapctl_usage_error("model-info");
     ort_options o;
     ort_options_defaults(&o);
     o.library_path = opt(argc, argv, "--ort");
@@ -268,17 +264,12 @@ static void scatter(float *dst, const float *src, int B, int N, int T, int f0, s
         memcpy(dst + ((size_t)b * N + f0) * k, src + (size_t)b * T * k, (size_t)T * k * sizeof(float));
 }
 
-static int cmd_infer(int argc, char **argv)
+int cmd_infer(int argc, char **argv)
 {
     const char *model_path = opt(argc, argv, "--model");
     const char *in_path = opt(argc, argv, "--input");
     const char *out_path = opt(argc, argv, "--output");
-    if (!model_path || !in_path || !out_path) {
-        fprintf(stderr, "usage: mocapctl infer --model M.onnx --input IN --output OUT [--frames T | "
-                        "--stream] [--batch B] [--threads N] [--opt 0-3] [--provider cpu|cuda] "
-                        "[--repeat R] [--ort LIB]\n");
-        return 2;
-    }
+    if (!model_path || !in_path || !out_path) return mocapctl_usage_error("infer");
     /* Numbers first, before anything is read: 0 = not given (the whole clip, any batch). */
     const int frames = (int)cli_integer(argc, argv, "--frames", 0, 1, 1 << 30);
     const int batch = (int)cli_integer(argc, argv, "--batch", 0, 1, 1 << 20);
@@ -426,10 +417,4 @@ done:
     bundle_free(&in);
     bundle_free(&out);
     return rc;
-}
-
-int mocapctl_onnx(const char *cmd, int argc, char **argv)
-{
-    if (strcmp(cmd, "model-info") == 0) return cmd_model_info(argc, argv);
-    return cmd_infer(argc, argv);
 }

@@ -35,6 +35,18 @@ const char *cli_value(int argc, char **argv, const char *name)
     return NULL;
 }
 
+int cli_values(int argc, char **argv, const char *name, const char **out, int cap)
+{
+    int n = 0;
+    for (int i = 0; i + 1 < argc; ++i) {
+        if (strcmp(argv[i], name) == 0) {
+            if (n == cap) return -1;
+            out[n++] = argv[++i];
+        }
+    }
+    return n;
+}
+
 int cli_flag(int argc, char **argv, const char *name)
 {
     for (int i = 0; i < argc; ++i)
@@ -128,7 +140,7 @@ void cli_refuse_unknown(const char *command, int argc, char **argv, const char *
         if (equals && option_kind(known, arg, (size_t)(equals - arg)) == 2)
             usage_exit("%s: write '%.*s %s': a value follows its option after a space", command,
                        (int)(equals - arg), arg, equals + 1);
-        usage_exit("%s has no option %s ('mocapctl --help' lists them)", command, arg);
+        usage_exit("%s has no option %s ('mocapctl %s --help' lists them)", command, arg, command);
     }
 }
 
@@ -167,4 +179,27 @@ void cli_refuse_overwriting(const char *input, const char *input_what, int argc,
                 usage_exit("%s and %s name the same file (%s)", outputs[j], outputs[i], out);
         }
     }
+}
+
+int cli_smoothing(int argc, char **argv, mocap_solver_config *out)
+{
+    mocap_solver_config_defaults(out);
+    const char *smoothing = cli_value(argc, argv, "--smoothing");
+    if (!smoothing) return 0;
+    char *end = NULL;
+    double hz = strtod(smoothing, &end), beta = out->smoothing_beta;
+    int bad = end == smoothing;
+    if (!bad && *end == ',') {
+        const char *b = end + 1;
+        beta = strtod(b, &end);
+        bad = end == b;
+    }
+    if (bad || *end != '\0' || !(hz >= 0.0 && hz < 1e6) || !(beta >= 0.0 && beta < 1e6)) {
+        fprintf(stderr, "mocapctl: --smoothing wants HZ or HZ,BETA with HZ >= 0 (0: off) and "
+                        "BETA >= 0, got '%s'\n", smoothing);
+        return 2;
+    }
+    out->smoothing_min_cutoff_hz = (float)hz;
+    out->smoothing_beta = (float)beta;
+    return 0;
 }

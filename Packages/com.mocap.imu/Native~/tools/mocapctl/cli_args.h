@@ -4,11 +4,16 @@
 #ifndef MOCAPCTL_CLI_ARGS_H
 #define MOCAPCTL_CLI_ARGS_H
 
+#include "mocap_imu.h"
+
 /* The value after `name`, or NULL when `name` is not given. `name` as the last argument, or
  * followed by another --option, is a usage error (the option would silently lose its value, or
  * take the next option's name as a file name). */
 const char *cli_value(int argc, char **argv, const char *name);
 int cli_flag(int argc, char **argv, const char *name);
+/* Every value of a repeated option (--vmc A --vmc B), in order, into out[0..cap): their count,
+ * or -1 when there are more than `cap`. */
+int cli_values(int argc, char **argv, const char *name, const char **out, int cap);
 /* A number option: `fallback` when absent; otherwise the whole value must be a finite number
  * within [lo, hi]. */
 double cli_number(int argc, char **argv, const char *name, double fallback, double lo, double hi);
@@ -35,5 +40,10 @@ void cli_refuse_options(int argc, char **argv, const char *names, const char *wh
  * writing would empty the input before it is read. `outputs` ends with NULL. */
 void cli_refuse_overwriting(const char *input, const char *input_what, int argc, char **argv,
                             const char *const *outputs);
+
+/* The solver options of the pose commands: defaults, then --smoothing HZ[,BETA] (the one-euro
+ * output filter's cut-off at rest, Hz, and its rise per rad/s of joint speed; 0 = the model's
+ * raw output). 0, or 2 (a usage error, printed). */
+int cli_smoothing(int argc, char **argv, mocap_solver_config *out);
 
 #endif

@@ -1,0 +1,179 @@
+/* mocapctl stream: solved poses to VMC receivers (OSC over UDP), character i to the i-th --vmc;
+ * the characters come from replays (--replay, one per character) or one live port (--port). */
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "interrupt.h"
+#include "live_session.h"
+#include "platform.h"
+#include "pose_model.h"
+#include "replay_session.h"
+#include "report.h"
+
+#define STREAM_MAX 16
+#define POSE_DRAIN 256
+
+int cmd_stream(int argc, char **argv)
+{
+    const char *dests[STREAM_MAX], *replays[STREAM_MAX];
+    int ndest = cli_values(argc, argv, "--vmc", dests, STREAM_MAX);
+    int nrep = cli_values(argc, argv, "--replay", replays, STREAM_MAX);
+    const char *port = cli_value(argc, argv, "--port");
+    const char *rate = cli_value(argc, argv, "--rate");
+    /* Read before anything is opened: a bad value must not leave an empty capture behind. */
+    const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
+    const char *speed = cli_value(argc, argv, "--speed");
+    const char *prelude = cli_value(argc, argv, "--prelude");
+    mocap_solver_config solver_config;
+    if (cli_smoothing(argc, argv, &solver_config) != 0) return 2;
+    if (ndest < 0 || nrep < 0) {
+        fprintf(stderr, "mocapctl: at most %d --vmc and --replay\n", STREAM_MAX);
+        return 2;
+    }
+    if (ndest == 0 || (nrep == 0) == (port == NULL)) {
+        fprintf(stderr, "mocapctl stream: give --vmc HOST:PORT (e.g. 127.0.0.1:39539) and either "
+                        "--replay CAPTURE or --port DEV\n");
+        return mocapctl_usage_error("stream");
+    }
+    if (port)
+        cli_refuse_options(argc, argv, "--speed --realtime --prelude", "applies to --replay only");
+    else
+        cli_refuse_options(argc, argv, "--baud", "applies to --port only");
+    const int characters = port ? 1 : nrep;
+    if (ndest != characters) {
+        fprintf(stderr, "mocapctl stream: %d character(s) but %d --vmc destination(s): character i "
+                        "goes to the i-th --vmc\n", characters, ndest);
+        return 2;
+    }
+    mocap_vmc_options vopt;
+    mocap_vmc_options_defaults(&vopt);
+    if (rate) vopt.max_rate_hz = (float)cli_number(argc, argv, "--rate", 60.0, 0.1, 1000.0);
+    vopt.allow_remote = cli_flag(argc, argv, "--allow-remote");
+
+    int rc = 1;
+    mocap_model *model = NULL;
+    mocap_model_info info;
+    mocap_solver *solver = NULL;
+    mocap_session *sessions[STREAM_MAX] = {0};
+    mocap_vmc *vmc[STREAM_MAX] = {0};
+    int32_t ids[STREAM_MAX];
+    int ended[STREAM_MAX] = {0};
+    mocap_pose *poses = NULL;
+    mocap_status s;
+
+    /* Destinations first: a bad one fails before anything is loaded. */
+    for (int i = 0; i < ndest; ++i) {
+        s = mocap_vmc_open(dests[i], &vopt, &vmc[i]);
+        if (s != MOCAP_OK) {
+            rc = report_failure(s, "VMC destination");
+            goto done;
+        }
+    }
+    if (pose_model_open(cli_value(argc, argv, "--model"), &model, &info) != 0) goto done;
+    poses = (mocap_pose *)malloc(POSE_DRAIN * sizeof *poses);
+    if (!poses) goto done;
+
+    if (port) {
+        if (live_session_open("stream", argc, argv, NULL, info.frame_rate, &sessions[0]) != 0) goto done;
+        int cal = live_session_guided_step(sessions[0], MOCAP_CALIBRATION_HEADING,
+                                           "Heading step: lay all six sensors still on a flat "
+                                           "surface, X axis (the arrow) pointing where you will "
+                                           "face, Z up.", 3.0f);
+        if (cal == 0)
+            cal = live_session_guided_step(sessions[0], MOCAP_CALIBRATION_TPOSE,
+                                           "T-pose step: strap the sensors on, face the same way, "
+                                           "arms straight out to the sides, stand still.", 3.0f);
+        if (cal != 0) goto done;
+    } else {
+        for (int i = 0; i < nrep; ++i) {
+            mocap_session_config cfg;
+            mocap_config_defaults(&cfg);
+            cfg.source_kind = MOCAP_SOURCE_REPLAY;
+            snprintf(cfg.path, sizeof cfg.path, "%s", replays[i]);
+            cfg.replay_realtime = cli_flag(argc, argv, "--realtime") || speed != NULL;
+            if (speed) cfg.replay_speed = (float)cli_number(argc, argv, "--speed", 1.0, 0.01, 1000.0);
+            cfg.output_rate_hz = info.frame_rate;
+            if (replay_session_open(replays[i], &cfg, prelude, NULL, &sessions[i]) != 0) goto done;
+        }
+    }
+    s = mocap_solver_open(model, &solver_config, &solver);
+    for (int i = 0; s == MOCAP_OK && i < characters; ++i)
+        s = mocap_solver_add_character(solver, sessions[i], &ids[i]);
+    if (s == MOCAP_OK) s = mocap_solver_start(solver);
+    for (int i = 0; !port && s == MOCAP_OK && i < characters; ++i) s = mocap_session_start(sessions[i]);
+    if (s != MOCAP_OK) {
+        rc = report_failure(s, "starting the solver");
+        goto done;
+    }
+    for (int i = 0; i < characters; ++i)
+        printf("character %d (%s) -> VMC %s, at most %g bundles/s\n", i, port ? port : replays[i],
+               dests[i], (double)vopt.max_rate_hz);
+    fflush(stdout);
+
+    const int64_t start = mocap_monotonic_ns();
+    uint64_t send_errors = 0;
+    int running = characters;
+    while (running > 0 && !mocapctl_interrupted &&
+           (double)(mocap_monotonic_ns() - start) * 1e-9 < limit) {
+        uint32_t total = 0;
+        for (int i = 0; i < characters; ++i) {
+            if (ended[i]) continue;
+            uint32_t n = 0;
+            s = mocap_solver_drain(solver, ids[i], poses, POSE_DRAIN, &n);
+            for (uint32_t k = 0; k < n; ++k) {
+                mocap_status vs = mocap_vmc_send_pose(vmc[i], &info, &poses[k]);
+                if (vs != MOCAP_OK && vs != MOCAP_ERR_NO_DATA && send_errors++ < 5)
+                    fprintf(stderr, "mocapctl: %s\n", mocap_last_error());
+            }
+            total += n;
+            if (s == MOCAP_ERR_END_OF_STREAM) {
+                ended[i] = 1;
+                running--;
+            } else if (s != MOCAP_OK && s != MOCAP_ERR_NO_DATA) {
+                rc = report_failure(s, "solving");
+                goto done;
+            }
+        }
+        if (total == 0) mocap_sleep_ms(1);
+    }
+    rc = 0;
+    for (int i = 0; i < characters; ++i) {
+        mocap_vmc_stats st;
+        mocap_vmc_get_stats(vmc[i], &st);
+        printf("character %d -> %s: %llu poses, %llu bundles sent (%u bones each, %u bytes), "
+               "%llu skipped by the rate cap, %llu send failures\n",
+               i, dests[i], (unsigned long long)st.poses, (unsigned long long)st.bundles_sent,
+               st.bones_per_bundle, st.last_bundle_size, (unsigned long long)st.skipped_rate,
+               (unsigned long long)st.send_failures);
+        if (st.bundles_sent == 0) {
+            fprintf(stderr, "mocapctl: character %d: nothing was sent (calibration refused or the "
+                            "capture ended before it finished)\n", i);
+            rc = 1;
+        }
+    }
+    if (report_inference_failures(solver)) rc = 1;
+    /* A replay whose file stopped reading part way streamed less than the capture holds. */
+    for (int i = 0; !port && i < nrep; ++i) {
+        if (report_replay_ended_early(sessions[i])) rc = 1;
+        report_capture_damage(sessions[i], replays[i]);
+    }
+    for (int i = 0; i < characters; ++i) {
+        char what[32];
+        snprintf(what, sizeof what, "character %d", i);
+        report_dropped(sessions[i], solver, ids[i], what,
+                       port ? "the machine could not keep up with the sensors"
+                            : "a lower --speed (or none: an as-fast-as-possible replay waits "
+                              "instead of dropping) streams every pose");
+    }
+done:
+    if (solver) mocap_solver_close(solver);
+    for (int i = 0; i < STREAM_MAX; ++i) {
+        if (sessions[i]) mocap_session_close(sessions[i]);
+        mocap_vmc_close(vmc[i]);
+    }
+    if (model) mocap_model_close(model);
+    free(poses);
+    return rc;
+}
