@@ -23,7 +23,8 @@ int sensor_truth_load(const char *path, sensor_truth *table)
         if (line[0] == '#' || line[0] == '\n' || line[0] == 't') continue;
         if (table->count == cap) {
             cap *= 2;
-            sensor_truth_row *grown = (sensor_truth_row *)realloc(table->rows, cap * sizeof(sensor_truth_row));
+            sensor_truth_row *grown =
+                (sensor_truth_row *)realloc(table->rows, cap * sizeof(sensor_truth_row));
             if (!grown) break;
             table->rows = grown;
         }
@@ -73,7 +74,8 @@ int sensor_truth_at(sensor_truth *table, double t, sensor_truth_row *out)
     if (t < table->rows[0].t || t > table->rows[table->count - 1].t) return -1;
     while (table->cursor + 1 < table->count && table->rows[table->cursor + 1].t < t) table->cursor++;
     const sensor_truth_row *a = &table->rows[table->cursor];
-    const sensor_truth_row *b = &table->rows[table->cursor + 1 < table->count ? table->cursor + 1 : table->cursor];
+    const size_t next = table->cursor + 1 < table->count ? table->cursor + 1 : table->cursor;
+    const sensor_truth_row *b = &table->rows[next];
     double u = b->t > a->t ? (t - a->t) / (b->t - a->t) : 0.0;
     if (u < 0) u = 0;
     if (u > 1) u = 1;
