@@ -1,10 +1,11 @@
 """The pose model through the REAL ONNX Runtime: the engine's own C module, driven by
-`mocapctl infer` (Packages/com.mocap.imu/Native~/tools/infer.c).
+`mocapctl infer` (Packages/com.mocap.imu/Native~/tools/mocapctl/cmd_infer.c).
 
 ONNX Runtime itself (the C library) comes from `scripts/fetch_onnxruntime.sh` into
 build/third_party/onnxruntime. mocapctl is built on demand into build/training-engine (CMake,
 tests off) unless the environment variable MOCAP_MOCAPCTL names one. Arrays travel through
-"tensor bundle" files (format in tools/infer.c and training/README.md).
+"tensor bundle" files (format in Packages/com.mocap.imu/Native~/tools/mocapctl/cmd_infer.c and
+training/README.md).
 
     run_onnx(model_path, imu_orientation (B,T,6,3,3), imu_acceleration (B,T,6,3), state=None)
         -> dict(joint_rotations (B,T,24,3,3), root_velocity (B,T,3), foot_contact (B,T,2),
