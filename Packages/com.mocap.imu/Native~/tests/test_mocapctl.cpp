@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -575,4 +577,90 @@ TEST(Mocapctl, SynthSaysHowLongTheMotionIsAndWhenSecondsWasCut)
               std::string::npos) << longer.output;
     // The capture itself is the whole motion either way (the header's creation time differs).
     EXPECT_EQ(read_file_bytes(dir + "/l.cap").size(), read_file_bytes(dir + "/m.cap").size());
+}
+
+#include <algorithm>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+
+namespace {
+
+// Arrival times (seconds, steady clock) of the UDP datagrams a `mocapctl stream` run sends to a
+// loopback port of our own, and the command's result.
+struct StreamArrivals {
+    std::vector<double> times;
+    CommandResult result;
+};
+
+StreamArrivals receive_stream(const std::string &args_before_port, const std::string &args_after_port)
+{
+    StreamArrivals out;
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = 0;
+    socklen_t len = sizeof a;
+    if (fd < 0 || bind(fd, (sockaddr *)&a, sizeof a) != 0 || getsockname(fd, (sockaddr *)&a, &len) != 0) {
+        ADD_FAILURE() << "no loopback UDP socket";
+        return out;
+    }
+    const std::string port = std::to_string(ntohs(a.sin_port));
+    std::atomic<bool> done{false};
+    std::thread runner([&] {
+        out.result = run_command(args_before_port + port + args_after_port);
+        done = true;
+    });
+    auto t0 = std::chrono::steady_clock::now();
+    char buf[65536];
+    for (;;) {
+        pollfd p{fd, POLLIN, 0};
+        if (poll(&p, 1, 20) > 0 && recv(fd, buf, sizeof buf, 0) > 0) {
+            out.times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+            continue;
+        }
+        if (done) break;
+    }
+    runner.join();
+    close(fd);
+    return out;
+}
+
+}  // namespace
+
+// A replay streams at the capture's pace, one bundle per model frame, evenly: a receiver sees
+// a bundle every 1/60 s, not bursts as the engine happens to solve them. --fast does not wait.
+TEST(Mocapctl, StreamPacesAReplayEvenlyByDefaultAndFastDoesNot)
+{
+    std::string dir = test_temp_dir();
+    ASSERT_EQ(run_command("synth --out " + dir + "/s.cap --motion walk --seconds 2 --seed 4").exit_code, 0);
+    StreamArrivals paced = receive_stream("stream --vmc 127.0.0.1:", " --replay " + dir + "/s.cap --smoothing 0");
+    ASSERT_EQ(paced.result.exit_code, 0) << paced.result.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(paced.result.output, m, std::regex("(\\d+) bundles sent"))) << paced.result.output;
+    const size_t sent = std::stoul(m[1]);
+    ASSERT_GT(sent, 120u) << paced.result.output;
+    ASSERT_EQ(paced.times.size(), sent) << "every bundle arrived (loopback)";
+
+    std::vector<double> gaps;
+    for (size_t i = 1; i < paced.times.size(); ++i) gaps.push_back(paced.times[i] - paced.times[i - 1]);
+    std::vector<double> sorted = gaps;
+    std::sort(sorted.begin(), sorted.end());
+    const double period = 1.0 / 60.0;
+    EXPECT_NEAR(sorted[sorted.size() / 2], period, 0.0015) << "median gap";
+    size_t even = std::count_if(gaps.begin(), gaps.end(), [&](double g) { return std::fabs(g - period) < 0.005; });
+    EXPECT_GE((double)even, 0.8 * gaps.size()) << even << " of " << gaps.size() << " gaps within 5 ms of 1/60 s";
+    const double span = paced.times.back() - paced.times.front();
+    EXPECT_NEAR(span, (sent - 1) * period, 0.05 * (sent - 1) * period) << "the capture's own duration";
+
+    StreamArrivals fast = receive_stream("stream --vmc 127.0.0.1:", " --replay " + dir + "/s.cap --smoothing 0 --fast --rate 1000");
+    ASSERT_EQ(fast.result.exit_code, 0) << fast.result.output;
+    ASSERT_EQ(fast.times.size(), sent) << fast.result.output;
+    EXPECT_LT(fast.times.back() - fast.times.front(), span / 2) << "--fast does not wait for the pace";
+
+    CommandResult both = run_command("stream --vmc 127.0.0.1:9 --replay " + dir + "/s.cap --fast --speed 2");
+    EXPECT_EQ(both.exit_code, 2) << both.output;
+    EXPECT_NE(both.output.find("cannot be combined"), std::string::npos) << both.output;
 }

@@ -1,5 +1,6 @@
 /* mocapctl stream: solved poses to VMC receivers (OSC over UDP), character i to the i-th --vmc;
  * the characters come from replays (--replay, one per character) or one live port (--port). */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -25,6 +26,8 @@ int cmd_stream(int argc, char **argv)
     /* Read before anything is opened: a bad value must not leave an empty capture behind. */
     const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
     const char *speed = cli_value(argc, argv, "--speed");
+    const int fast = cli_flag(argc, argv, "--fast");
+    const double pace = speed ? cli_number(argc, argv, "--speed", 1.0, 0.01, 1000.0) : 1.0;
     const char *prelude = cli_value(argc, argv, "--prelude");
     mocap_solver_config solver_config;
     if (cli_smoothing(argc, argv, &solver_config) != 0) return 2;
@@ -37,8 +40,13 @@ int cmd_stream(int argc, char **argv)
                         "--replay CAPTURE or --port DEV\n");
         return mocapctl_usage_error("stream");
     }
+    if (fast && (speed || cli_flag(argc, argv, "--realtime"))) {
+        fprintf(stderr, "mocapctl stream: --fast sends as fast as the model solves; it cannot be "
+                        "combined with --realtime or --speed\n");
+        return 2;
+    }
     if (port)
-        cli_refuse_options(argc, argv, "--speed --realtime --prelude", "applies to --replay only");
+        cli_refuse_options(argc, argv, "--speed --realtime --fast --prelude", "applies to --replay only");
     else
         cli_refuse_options(argc, argv, "--baud", "applies to --port only");
     const int characters = port ? 1 : nrep;
@@ -72,7 +80,7 @@ int cmd_stream(int argc, char **argv)
         }
     }
     if (pose_model_open(cli_value(argc, argv, "--model"), &model, &info) != 0) goto done;
-    poses = (mocap_pose *)malloc(POSE_DRAIN * sizeof *poses);
+    poses = (mocap_pose *)malloc((size_t)STREAM_MAX * POSE_DRAIN * sizeof *poses);
     if (!poses) goto done;
 
     if (port) {
@@ -92,8 +100,9 @@ int cmd_stream(int argc, char **argv)
             mocap_config_defaults(&cfg);
             cfg.source_kind = MOCAP_SOURCE_REPLAY;
             snprintf(cfg.path, sizeof cfg.path, "%s", replays[i]);
-            cfg.replay_realtime = cli_flag(argc, argv, "--realtime") || speed != NULL;
-            if (speed) cfg.replay_speed = (float)cli_number(argc, argv, "--speed", 1.0, 0.01, 1000.0);
+            /* The session runs ahead (a fast replay waits when its queues are full, so nothing
+             * is lost); the send loop below paces the poses by their own time stamps. */
+            cfg.replay_realtime = 0;
             cfg.output_rate_hz = info.frame_rate;
             if (replay_session_open(replays[i], &cfg, prelude, NULL, &sessions[i]) != 0) goto done;
         }
@@ -112,31 +121,67 @@ int cmd_stream(int argc, char **argv)
                dests[i], (double)vopt.max_rate_hz);
     fflush(stdout);
 
+    /* A replay is sent at its own pace: pose k of a character leaves at the time its frame was
+     * recorded (relative to the character's first pose, divided by --speed), however unevenly
+     * the engine solved them, so a receiver sees one bundle every 1/rate s. Live poses and
+     * --fast leave as soon as they are solved. */
+    const int paced = !port && !fast;
     const int64_t start = mocap_monotonic_ns();
     uint64_t send_errors = 0;
     int running = characters;
+    uint32_t pending[STREAM_MAX] = {0}, next[STREAM_MAX] = {0};
+    double first_time[STREAM_MAX];
+    int have_first[STREAM_MAX] = {0};
     while (running > 0 && !mocapctl_interrupted &&
            (double)(mocap_monotonic_ns() - start) * 1e-9 < limit) {
-        uint32_t total = 0;
+        int64_t earliest_due = INT64_MAX;
+        int progressed = 0;
         for (int i = 0; i < characters; ++i) {
             if (ended[i]) continue;
-            uint32_t n = 0;
-            s = mocap_solver_drain(solver, ids[i], poses, POSE_DRAIN, &n);
-            for (uint32_t k = 0; k < n; ++k) {
-                mocap_status vs = mocap_vmc_send_pose(vmc[i], &info, &poses[k]);
+            mocap_pose *mine = poses + (size_t)i * POSE_DRAIN;
+            if (next[i] == pending[i]) {
+                uint32_t n = 0;
+                s = mocap_solver_drain(solver, ids[i], mine, POSE_DRAIN, &n);
+                if (s == MOCAP_ERR_END_OF_STREAM) {
+                    ended[i] = 1;
+                    running--;
+                    continue;
+                }
+                if (s != MOCAP_OK && s != MOCAP_ERR_NO_DATA) {
+                    rc = report_failure(s, "solving");
+                    goto done;
+                }
+                pending[i] = n;
+                next[i] = 0;
+                if (n > 0 && !have_first[i]) {
+                    first_time[i] = mine[0].time_s;
+                    have_first[i] = 1;
+                }
+            }
+            while (next[i] < pending[i]) {
+                const mocap_pose *pose = &mine[next[i]];
+                if (paced) {
+                    int64_t due = start + (int64_t)((pose->time_s - first_time[i]) / pace * 1e9);
+                    if (mocap_monotonic_ns() < due) {
+                        if (due < earliest_due) earliest_due = due;
+                        break;
+                    }
+                }
+                mocap_status vs = mocap_vmc_send_pose(vmc[i], &info, pose);
                 if (vs != MOCAP_OK && vs != MOCAP_ERR_NO_DATA && send_errors++ < 5)
                     fprintf(stderr, "mocapctl: %s\n", mocap_last_error());
-            }
-            total += n;
-            if (s == MOCAP_ERR_END_OF_STREAM) {
-                ended[i] = 1;
-                running--;
-            } else if (s != MOCAP_OK && s != MOCAP_ERR_NO_DATA) {
-                rc = report_failure(s, "solving");
-                goto done;
+                next[i]++;
+                progressed = 1;
             }
         }
-        if (total == 0) mocap_sleep_ms(1);
+        if (progressed) continue;
+        if (earliest_due != INT64_MAX) {
+            int64_t wait_ns = earliest_due - mocap_monotonic_ns();
+            /* Whole milliseconds: a pose leaves within about 1 ms of its time (no busy wait). */
+            mocap_sleep_ms(wait_ns > 1000000 ? (int)(wait_ns / 1000000) : 1);
+        } else {
+            mocap_sleep_ms(1);
+        }
     }
     rc = 0;
     for (int i = 0; i < characters; ++i) {

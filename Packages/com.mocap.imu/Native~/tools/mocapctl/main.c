@@ -88,14 +88,15 @@ static const mocapctl_command COMMANDS[] = {
      "  --seconds S          stop after S seconds (default: at Ctrl-C)\n",
      cmd_record},
     {"stream", MOCAPCTL_STREAM_OPTIONS, "solved poses to VMC receivers (OSC over UDP)",
-     "usage: mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...] [--realtime]\n"
-     "                      [--speed X] [--prelude H,S,T] | --port DEV [--baud B]) [--model M]\n"
+     "usage: mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...]\n"
+     "                      [--speed X | --fast] [--prelude H,S,T] | --port DEV [--baud B]) [--model M]\n"
      "                      [--rate HZ] [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]\n"
      "Character i (the i-th --replay, or the one --port) goes to the i-th --vmc.\n"
      "  --vmc HOST:PORT      a receiver (VSeeFace, EVMC4U, VMC4B listen on 39539)\n"
      "  --replay CAPTURE     a character from a capture\n"
-     "  --realtime           at the capture's pace\n"
+     "  --realtime           at the capture's pace, one pose every 1/rate s (the default)\n"
      "  --speed X            at X times the capture's pace\n"
+     "  --fast               as fast as the model solves (no pacing)\n"
      "  --prelude H,S,T      the prelude's heading, strap and T-pose seconds (default 3,2,3)\n"
      "  --port DEV, --baud B a character from a live port, after the guided calibration\n"
      "  --model M            the pose model (default: the shipped one)\n"

@@ -14,7 +14,7 @@
 #define MOCAPCTL_LIVE_OPTIONS "--port= --baud= --record= --seconds= --model= --pose --smoothing="
 #define MOCAPCTL_RECORD_OPTIONS "--port= --out= --baud= --seconds="
 #define MOCAPCTL_STREAM_OPTIONS                                                                   \
-    "--vmc= --replay= --realtime --speed= --prelude= --port= --baud= --model= --rate= "         \
+    "--vmc= --replay= --realtime --fast --speed= --prelude= --port= --baud= --model= --rate= "         \
     "--seconds= --allow-remote --smoothing="
 #define MOCAPCTL_BENCH_DECODE_OPTIONS "--seconds="
 #define MOCAPCTL_BENCH_OPTIONS                                                                    \
