@@ -54,8 +54,9 @@ def exported_functions(library: Path, prefix: str) -> set[str]:
             names.add(m.group(1))
         return names
     listing = run([f"{prefix}nm", "-D", "--defined-only", str(library)])
+    # Reserved names ("__lsan_default_suppressions", a sanitizer build's hook) are no API.
     return {parts[2] for parts in (l.split() for l in listing.splitlines())
-            if len(parts) == 3 and parts[1] in "TtWi"}
+            if len(parts) == 3 and parts[1] in "TtWi" and not parts[2].startswith("__")}
 
 
 def defined_functions(archive_or_binary: Path, prefix: str, kinds: str) -> set[str]:

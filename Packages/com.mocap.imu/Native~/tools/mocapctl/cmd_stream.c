@@ -209,8 +209,8 @@ int cmd_stream(int argc, char **argv)
         snprintf(what, sizeof what, "character %d", i);
         report_dropped(sessions[i], solver, ids[i], what,
                        port ? "the machine could not keep up with the sensors"
-                            : "a lower --speed (or none: an as-fast-as-possible replay waits "
-                              "instead of dropping) streams every pose");
+                            : "a streamed replay waits instead of dropping, so this is a bug: "
+                              "please report it with the capture");
     }
 done:
     if (solver) mocap_solver_close(solver);
