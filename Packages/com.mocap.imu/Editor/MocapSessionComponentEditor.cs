@@ -217,7 +217,8 @@ namespace Mocap.Imu.Editor
                     MocapComponentBridge.TryGetLatestPose(component, character, out pose);
                 var recorder = new TakeRecorder(avatar, shown, take);
                 var sessionComponent = typed;
-                recorder.Ended += () => _lastTakeSource = (sessionComponent, character);
+                // Also when the take is saved on leaving Play Mode, while the session still runs.
+                recorder.SavedBeside = result => KeepCaptureAndCalibration(result, sessionComponent, character);
                 MocapSessionComponent.PoseHandler keep = (int c, in MocapPose pose) =>
                 {
                     if (c == character && recorder.IsRecording) take.Add(pose);
@@ -231,15 +232,10 @@ namespace Mocap.Imu.Editor
             new TakeRecorder(avatar, source, take);
         }
 
-        // The session and character of the take that ended last, whose capture and calibration are kept.
-        static (MocapSessionComponent Component, int Character) _lastTakeSource;
-
         static void StopTake(TakeRecorder recorder)
         {
-            _lastTakeSource = (null, 0);
             var result = recorder.Stop();
             if (result.PosesPath != null) _lastPosesPath = result.PosesPath;
-            KeepCaptureAndCalibration(result);
             if (result.MissingFrames > 0)
                 Debug.LogWarning($"Mocap take: {result.MissingFrames} model frames were never shown by the editor and have no key " +
                                  "(the editor ran slower than the model); the clip interpolates across them.");
@@ -248,9 +244,8 @@ namespace Mocap.Imu.Editor
             if (result.Clip) EditorGUIUtility.PingObject(result.Clip);
         }
 
-        static void KeepCaptureAndCalibration(TakeResult result)
+        static void KeepCaptureAndCalibration(TakeResult result, MocapSessionComponent component, int character)
         {
-            var (component, character) = _lastTakeSource;
             if (result.Files == null || component == null) return;
             string project = Path.GetDirectoryName(Application.dataPath);
             try

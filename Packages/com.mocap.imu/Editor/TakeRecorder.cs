@@ -97,6 +97,12 @@ namespace Mocap.Imu.Editor
         /// <summary>Key reduction of the saved clips: none by default (every model frame a key).</summary>
         public KeyReduction Reduction { get; set; } = KeyReduction.None;
 
+        /// <summary>
+        /// Called after a take is saved (by <see cref="Stop"/> with a folder, or on leaving Play
+        /// Mode) to put more files beside its clips, e.g. the raw capture and the calibration.
+        /// </summary>
+        public Action<TakeResult> SavedBeside;
+
         /// <summary>Raised once when the take stops, saved or not (listeners unsubscribe here).</summary>
         public event Action Ended;
 
@@ -180,6 +186,9 @@ namespace Mocap.Imu.Editor
                 AssetDatabase.ImportAsset(result.PosesPath);
             }
             AssetDatabase.SaveAssets();
+            // The clips are saved: files beside them are extras that must not lose the take.
+            try { SavedBeside?.Invoke(result); }
+            catch (Exception e) { Debug.LogException(e); }
             return result;
         }
 
