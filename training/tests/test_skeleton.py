@@ -157,3 +157,14 @@ def test_twist_about_x_splits_swing_and_twist(rng):
     tw = sk.twist_about_x(swing @ sk.rot_axis("x", a))
     np.testing.assert_allclose(tw, sk.rot_axis("x", a), atol=1e-9)
     np.testing.assert_allclose(sk.twist_about_x(swing), np.broadcast_to(np.eye(3), (200, 3, 3)), atol=1e-9)
+
+
+def test_sensor_names_are_the_engines_segment_table_in_its_order():
+    # The engine's public header is the one table of sensor segments; training must not drift.
+    import re
+    from pathlib import Path
+    header = (Path(__file__).resolve().parents[2] / "Packages" / "com.mocap.imu" / "Native~" / "include"
+              / "mocap_imu.h").read_text()
+    segments = sorted((int(v), name.lower()) for name, v in re.findall(r"MOCAP_SEGMENT_([A-Z_]+)\s*=\s*(\d+)", header))
+    assert [v for v, _ in segments] == list(range(len(segments)))
+    assert [name for _, name in segments] == sk.SENSOR_NAMES
