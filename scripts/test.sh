@@ -165,7 +165,6 @@ fi
 # suites, and ctest runs them under Wine with the Windows ONNX Runtime DLL (the golden pose test
 # included). Missing MinGW-w64 or Wine is a failure, not a skip.
 echo "=== engine: Windows (MinGW-w64 build, ctest under Wine)"
-rm -f "$BUILD/windows.ctest.log"
 MOCAP_WINDOWS_BUILD_DIR="$BUILD/windows" JOBS="$JOBS" "$ROOT/scripts/test_windows.sh"
 if [ -s "$BUILD/windows.ctest.log" ]; then
   record_from "engine (windows, wine)" ctest "$BUILD/windows.ctest.log"

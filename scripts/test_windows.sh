@@ -25,6 +25,9 @@ LOG="$BUILD.ctest.log"
 
 say() { echo "test_windows: $*"; }
 die() { echo "test_windows: error: $*" >&2; exit 1; }
+# Whatever stops this run (a missing tool, a failed build) must not leave the last run's results
+# to be read as this one's.
+rm -f "$LOG"
 
 missing=()
 for tool in x86_64-w64-mingw32-gcc-posix x86_64-w64-mingw32-g++-posix wine cmake /usr/bin/python3; do
@@ -39,7 +42,6 @@ done
 
 started=$(date +%s)
 mkdir -p "$BUILD"
-rm -f "$LOG" # a failed build must not leave the last run's results to be read
 say "configure + build (MinGW-w64) in $BUILD"
 if ! cmake -S "$NATIVE" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
      -DCMAKE_TOOLCHAIN_FILE="$NATIVE/cmake/mingw-w64-x86_64.cmake" >"$BUILD.configure.log" 2>&1; then

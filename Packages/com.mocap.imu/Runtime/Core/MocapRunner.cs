@@ -98,7 +98,6 @@ namespace Mocap.Imu
             public MocapModel Model;
             public MocapSolver Solver;
             public MocapSession[] Sessions;
-            public string[] Names;
             // Each character's calibration as its session stopped (null: none, or it failed to
             // stop): read after the stop, which still finishes a step on the bytes read before it.
             public CalibrationData?[] FinalCalibrations;
@@ -150,7 +149,8 @@ namespace Mocap.Imu
 
         Engine _engine;
         Task<Engine> _opening;
-        string[] _openingNames = Array.Empty<string>();
+        // The characters' names from the plan last opened.
+        string[] _names = Array.Empty<string>();
         // An open that Close() gave up on: it disposes what it opened once done. The next open
         // waits for it, since it holds the same serial ports and files until then.
         Task _abandoned;
@@ -198,8 +198,7 @@ namespace Mocap.Imu
         /// <summary>The character's name from the plan.</summary>
         public string GetCharacterName(int character)
         {
-            var names = _engine?.Names ?? _openingNames;
-            return character >= 0 && character < names.Length ? names[character] : $"#{character}";
+            return character >= 0 && character < _names.Length ? _names[character] : $"#{character}";
         }
 
         /// <summary>
@@ -246,7 +245,7 @@ namespace Mocap.Imu
                     if (request.Calibrations[c] == null && !string.IsNullOrEmpty(plan.Characters[c].CalibrationFile))
                         request.Calibrations[c] = CalibrationData.Load(plan.Characters[c].CalibrationFile);
                 _recordingPaths = capturePaths;
-                _openingNames = Array.ConvertAll(plan.Characters, ch => ch.Name ?? "");
+                _names = Array.ConvertAll(plan.Characters, ch => ch.Name ?? "");
             }
             catch (Exception e)
             {
@@ -265,7 +264,7 @@ namespace Mocap.Imu
         // Worker thread.
         static Engine OpenEngine(OpenRequest r)
         {
-            var engine = new Engine { Names = Array.ConvertAll(r.Plan.Characters, ch => ch.Name ?? "") };
+            var engine = new Engine();
             try
             {
                 engine.Model = MocapModel.Open(r.Plan.ModelPath, r.Plan.ModelOptions);

@@ -80,7 +80,7 @@ int cmd_stream(int argc, char **argv)
         }
     }
     if (pose_model_open(cli_value(argc, argv, "--model"), &model, &info) != 0) goto done;
-    poses = (mocap_pose *)malloc((size_t)STREAM_MAX * POSE_DRAIN * sizeof *poses);
+    poses = (mocap_pose *)malloc((size_t)characters * POSE_DRAIN * sizeof *poses);
     if (!poses) goto done;
 
     if (port) {
