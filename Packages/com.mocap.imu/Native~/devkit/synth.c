@@ -29,17 +29,18 @@
 #define OMEGA_STEP_S 1e-5  /* central difference of the prelude orientations */
 #define MAX_TICKS 1e10
 
+/* Per configured sensor (config order). */
 typedef struct synth_setup {
-    double world_from_model[MOCAP_SENSOR_COUNT][9];
-    double model_from_world[MOCAP_SENSOR_COUNT][9];
-    double q_world_model[MOCAP_SENSOR_COUNT][4];
-    double sensor_to_bone[MOCAP_SENSOR_COUNT][9];
-    double q_bone_sensor[MOCAP_SENSOR_COUNT][4];   /* quaternion of M_i */
-    double q_heading[4];                           /* model <- sensor while lying X forward */
-    double acc_bias[MOCAP_SENSOR_COUNT][3];        /* g, sensor frame */
-    double tremor_freq[MOCAP_SENSOR_COUNT][3];
-    double tremor_phase[MOCAP_SENSOR_COUNT][3];
-    double mag_world[3];                           /* uT */
+    double world_from_model[MOCAP_MAX_SENSORS][9];
+    double model_from_world[MOCAP_MAX_SENSORS][9];
+    double q_world_model[MOCAP_MAX_SENSORS][4];
+    double sensor_to_bone[MOCAP_MAX_SENSORS][9];
+    double q_bone_sensor[MOCAP_MAX_SENSORS][4];   /* quaternion of M_i */
+    double q_heading[4];                          /* model <- sensor while lying X forward */
+    double acc_bias[MOCAP_MAX_SENSORS][3];        /* g, sensor frame */
+    double tremor_freq[MOCAP_MAX_SENSORS][3];
+    double tremor_phase[MOCAP_MAX_SENSORS][3];
+    double mag_world[3];                          /* uT */
 } synth_setup;
 
 static mocap_rng stream_rng(uint64_t seed, unsigned stream)
@@ -55,10 +56,13 @@ static void build_setup(const synth_config *cfg, synth_setup *su)
     double a[9], at[9];
     mocap_world_zup_to_model(a);
     mat3_transpose(at, a);
-    mat3_to_quat(su->q_heading, a);
     double base_deg = cfg->world_frame == MOCAP_WORLD_ENU ? 90.0 - cfg->facing_azimuth_deg
                                                           : -cfg->facing_azimuth_deg;
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+    memset(su, 0, sizeof *su);
+    mat3_to_quat(su->q_heading, a);
+    /* Sensor i always gets the i-th draws, so the default set's setup is the same whatever
+     * sensors are added after it. */
+    for (uint32_t i = 0; i < cfg->sensor_count && i < MOCAP_MAX_SENSORS; i++) {
         /* Every value is drawn whatever the settings, so that one setting never shifts the
          * draws of another. */
         double q[4];
@@ -108,7 +112,13 @@ void synth_config_defaults(synth_config *cfg)
     cfg->strap_s = 2.0;
     cfg->tpose_s = 3.0;
     cfg->motion_s = 1e6; /* the whole motion */
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) cfg->node_ids[i] = i;
+    mocap_session_config engine;
+    mocap_config_defaults(&engine);
+    cfg->sensor_count = engine.sensor_count;
+    for (uint32_t i = 0; i < engine.sensor_count && i < MOCAP_MAX_SENSORS; i++) {
+        cfg->segments[i] = engine.sensor_segments[i];
+        cfg->node_ids[i] = engine.node_ids[i];
+    }
     cfg->gateway_id = 1;
     cfg->imusol_layout = HIPNUC_LAYOUT_NODE_ID;
     cfg->start_receive_ns = 1000000000LL;
@@ -120,12 +130,12 @@ double synth_session_time(const synth_config *cfg, double t)
     return (double)cfg->start_receive_ns / 1e9 + t;
 }
 
-void synth_setup_rotations(const synth_config *cfg, double world_to_model[MOCAP_SENSOR_COUNT][9],
-                           double sensor_to_bone[MOCAP_SENSOR_COUNT][9])
+void synth_setup_rotations(const synth_config *cfg, double world_to_model[MOCAP_MAX_SENSORS][9],
+                           double sensor_to_bone[MOCAP_MAX_SENSORS][9])
 {
     synth_setup su;
     build_setup(cfg, &su);
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+    for (int i = 0; i < MOCAP_MAX_SENSORS; i++) {
         if (world_to_model) memcpy(world_to_model[i], su.model_from_world[i], sizeof su.model_from_world[i]);
         if (sensor_to_bone) memcpy(sensor_to_bone[i], su.sensor_to_bone[i], sizeof su.sensor_to_bone[i]);
     }
@@ -163,17 +173,31 @@ static mocap_status check_config(const synth_config *cfg)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
                           "synth: imusol_layout %d: 0x62 blocks always carry node ids",
                           (int)cfg->imusol_layout);
+    if (cfg->sensor_count < 1 || cfg->sensor_count > MOCAP_MAX_SENSORS)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "synth: sensor_count %u is not 1..%d",
+                          (unsigned)cfg->sensor_count, MOCAP_MAX_SENSORS);
+    const int sensors = (int)cfg->sensor_count;
     int present = 0;
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+    for (int i = 0; i < sensors; i++) {
+        const int seg = cfg->segments[i];
+        if (!mocap_segment_name(seg))
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                              "synth: sensor %d: segment %d is not one of the %d in the table", i,
+                              seg, (int)mocap_segment_count());
+        for (int j = 0; j < i; j++)
+            if (cfg->segments[j] == seg)
+                return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                                  "synth: segment %s has two sensors (%d and %d)",
+                                  mocap_segment_name(seg), j, i);
         int id = cfg->node_ids[i];
-        if (id == -1) continue; /* no sensor on this segment */
+        if (id == -1) continue; /* a sensor that never sends */
         if (id < 0 || id > 255)
-            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "synth: node id %d of segment %d is not 0..255",
-                              id, i);
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "synth: node id %d of %s is not 0..255",
+                              id, mocap_segment_name(seg));
         for (int j = 0; j < i; j++)
             if (cfg->node_ids[j] == id)
-                return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
-                                  "synth: node id %d used by segments %d and %d", id, j, i);
+                return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "synth: node id %d used by %s and %s",
+                                  id, mocap_segment_name(cfg->segments[j]), mocap_segment_name(seg));
         present++;
     }
     if (present == 0)
@@ -340,7 +364,10 @@ mocap_status synth_generate(const synth_config *cfg, synth_motion_fn motion, voi
     /* Ticks at k / rate for every k with k / rate <= total (a hair of slack for rounding). */
     const uint64_t ticks = (uint64_t)floor(total * cfg->rate_hz + 1e-9) + 1;
 
-    hipnuc_sample samples[MOCAP_SENSOR_COUNT];
+    const int sensors = (int)cfg->sensor_count;
+    uint32_t configured_segments = 0;
+    for (int i = 0; i < sensors; i++) configured_segments |= 1u << cfg->segments[i];
+    hipnuc_sample samples[MOCAP_MAX_SENSORS];
     uint8_t payload[HIPNUC_MAX_PAYLOAD];
     uint8_t frame[HIPNUC_HEADER_SIZE + HIPNUC_MAX_PAYLOAD];
     size_t offset = 0;
@@ -358,25 +385,40 @@ mocap_status synth_generate(const synth_config *cfg, synth_motion_fn motion, voi
         const uint32_t time_ms = cfg->start_sensor_ms + (uint32_t)(uint64_t)llround(t * 1000.0);
 
         if (info.phase == 3) {
+            memset(&truth, 0, sizeof truth);
             if (motion(motion_user, t - prelude, &truth) != 0) break; /* the motion has ended */
+            const uint32_t missing = configured_segments & ~truth.segment_mask;
+            if (missing) {
+                int seg = 0;
+                while (!(missing & (1u << seg))) seg++;
+                return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                                  "synth: the motion does not move segment %s, which has a sensor",
+                                  mocap_segment_name(seg));
+            }
+        } else {
+            /* The prelude's truth: every bone in the T-pose, the sensors' own sway added below. */
+            memset(&truth, 0, sizeof truth);
+            for (int seg = 0; seg < MOCAP_MAX_SENSORS; seg++) quat_identity(truth.bone_quat[seg]);
+            truth.segment_mask = (1u << mocap_segment_count()) - 1u;
         }
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < sensors; i++) {
+            const int seg = cfg->segments[i];
             double q_ms[4], omega[3], accel[3] = {0.0, 0.0, 0.0};
             if (info.phase == 3) {
-                quat_multiply(q_ms, truth.bone_quat[i], su.q_bone_sensor[i]);
+                quat_multiply(q_ms, truth.bone_quat[seg], su.q_bone_sensor[i]);
                 quat_normalize(q_ms);
                 for (int k3 = 0; k3 < 3; k3++) {
-                    omega[k3] = truth.angular_velocity[i][k3];
-                    accel[k3] = truth.accel[i][k3];
+                    omega[k3] = truth.angular_velocity[seg][k3];
+                    accel[k3] = truth.accel[seg][k3];
                 }
             } else {
                 double q_bone[4];
                 prelude_orientation(cfg, &su, i, t, q_ms, q_bone);
                 prelude_omega(cfg, &su, i, t, omega);
-                quat_copy(truth.bone_quat[i], q_bone);
+                quat_copy(truth.bone_quat[seg], q_bone);
                 for (int k3 = 0; k3 < 3; k3++) {
-                    truth.accel[i][k3] = 0.0;
-                    truth.angular_velocity[i][k3] = info.phase == 2 ? omega[k3] : 0.0;
+                    truth.accel[seg][k3] = 0.0;
+                    truth.angular_velocity[seg][k3] = info.phase == 2 ? omega[k3] : 0.0;
                 }
             }
             make_sample(cfg, &su, &noise, i, q_ms, omega, accel, time_ms, &samples[i]);
@@ -386,9 +428,9 @@ mocap_status synth_generate(const synth_config *cfg, synth_motion_fn motion, voi
          * fate does not shift which nodes the next ones lose. */
         int drop_packet = cfg->packet_dropout_prob > 0.0 &&
                           mocap_rng_uniform(&faults) < cfg->packet_dropout_prob;
-        hipnuc_sample present[MOCAP_SENSOR_COUNT];
+        hipnuc_sample present[MOCAP_MAX_SENSORS];
         uint32_t n = 0;
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < sensors; i++) {
             int drop_node = cfg->node_dropout_prob > 0.0 &&
                             mocap_rng_uniform(&faults) < cfg->node_dropout_prob;
             if (cfg->node_ids[i] < 0 || drop_node) continue;
@@ -450,8 +492,9 @@ static int write_packet(void *user, const synth_packet_info *info, const uint8_t
     if (ctx->truth) {
         int bad = fprintf(ctx->truth, "%.9f,%d", synth_session_time(ctx->cfg, info->t),
                           (int)info->phase) < 0;
-        for (int s = 0; s < MOCAP_SENSOR_COUNT && !bad; s++) {
-            const double *q = truth->bone_quat[s], *a = truth->accel[s];
+        for (uint32_t i = 0; i < ctx->cfg->sensor_count && !bad; i++) {
+            const int seg = ctx->cfg->segments[i];
+            const double *q = truth->bone_quat[seg], *a = truth->accel[seg];
             bad = fprintf(ctx->truth, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g", q[0], q[1], q[2], q[3],
                           a[0], a[1], a[2]) < 0;
         }
@@ -465,9 +508,6 @@ static int write_packet(void *user, const synth_packet_info *info, const uint8_t
     }
     return 0;
 }
-
-static const char *const SEGMENT_COLUMNS[MOCAP_SENSOR_COUNT] = {
-    "pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head"};
 
 mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion,
                                  void *motion_user, const char *capture_path,
@@ -493,8 +533,8 @@ mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion
                               "truth file %s: %s", truth_path, mocap_errno_text(e, buf, sizeof buf));
         }
         int bad = fputs("t_session,phase", ctx.truth) == EOF;
-        for (int s = 0; s < MOCAP_SENSOR_COUNT && !bad; s++) {
-            const char *n = SEGMENT_COLUMNS[s];
+        for (uint32_t i = 0; i < cfg->sensor_count && !bad; i++) {
+            const char *n = mocap_segment_name(cfg->segments[i]);
             bad = fprintf(ctx.truth, ",%s_qw,%s_qx,%s_qy,%s_qz,%s_ax,%s_ay,%s_az", n, n, n, n, n, n,
                           n) < 0;
         }

@@ -1,6 +1,7 @@
-/* Synthetic HiPNUC captures from a known motion of the six body segments: the project's own
- * test tooling (no recorded data needed). For each sensor tick it writes a 0x62 gateway frame
- * with one 0x91 block per node, exactly as the wireless receiver would, including
+/* Synthetic HiPNUC captures from a known motion of the body: the project's own test tooling (no
+ * recorded data needed). The sensor set is configurable (any segments of the engine's table, by
+ * default its default set of six). For each sensor tick it writes a 0x62 gateway frame with one
+ * 0x91 block per node, exactly as the wireless receiver would, including
  *  - a calibration prelude: sensors lying still with X forward (heading step), then strapped on
  *    and held in a T-pose, then the motion;
  *  - a per-sensor world frame (NWU or ENU, Z up) with an arbitrary heading, as 6-axis sensors
@@ -19,29 +20,33 @@
 extern "C" {
 #endif
 
-/* Truth for one instant, in the model frame. */
+/* Truth for one instant, in the model frame, indexed by segment (mocap_segment): a motion fills
+ * every segment it knows and says which in segment_mask. */
 typedef struct synth_pose {
-    double bone_quat[MOCAP_SENSOR_COUNT][4];   /* bone -> model */
-    double accel[MOCAP_SENSOR_COUNT][3];       /* linear acceleration of the sensor, m/s^2 */
-    double angular_velocity[MOCAP_SENSOR_COUNT][3]; /* of the bone, model frame, rad/s */
+    double bone_quat[MOCAP_MAX_SENSORS][4];   /* bone -> model */
+    double accel[MOCAP_MAX_SENSORS][3];       /* linear acceleration of the sensor, m/s^2 */
+    double angular_velocity[MOCAP_MAX_SENSORS][3]; /* of the bone, model frame, rad/s */
+    uint32_t segment_mask;                    /* bit s: segment s is filled */
 } synth_pose;
 
 /* A motion: fills the pose at time t (seconds since the motion started). Returns 0, or -1 when
  * t is past the end of the motion. */
 typedef int (*synth_motion_fn)(void *user, double t, synth_pose *out);
 
-/* Built-in procedural motions (bones identity at rest = T-pose; finite-differenced angular
- * velocity and analytic accelerations). name: "walk", "arms", "squat", "turn", "mixed"
- * (all four in sequence, the default). Returns NULL for an unknown name. */
+/* Built-in procedural motions of every segment of the table (bones identity at rest = T-pose;
+ * exact angular velocity and analytic accelerations). name: "walk", "arms", "squat", "turn",
+ * "mixed" (all four in sequence, the default). Returns NULL for an unknown name. */
 synth_motion_fn synth_builtin_motion(const char *name);
 /* How long a motion lasts, s (to 1 ms; at most `limit`): the first time it reports its end. */
 double synth_motion_duration(synth_motion_fn motion, void *user, double limit);
 /* Motion from a trajectory file (see docs/synth-trajectory.md): text lines
- * "t qw qx qy qz ax ay az" x 6 segments, in the model frame. Loaded into memory once. */
+ * "t qw qx qy qz ax ay az" x its segments, in the model frame: the six of the default set, or
+ * those a "segments NAME..." line names. Loaded into memory once. */
 typedef struct synth_trajectory synth_trajectory;
 mocap_status synth_trajectory_load(const char *path, synth_trajectory **out);
 void synth_trajectory_free(synth_trajectory *traj);
 double synth_trajectory_duration(const synth_trajectory *traj);
+uint32_t synth_trajectory_segment_mask(const synth_trajectory *traj); /* bit s: segment s */
 int synth_trajectory_motion(void *traj, double t, synth_pose *out); /* a synth_motion_fn */
 
 typedef struct synth_config {
@@ -55,7 +60,12 @@ typedef struct synth_config {
     double strap_s;               /* moving from heading step to T-pose (2) */
     double tpose_s;               /* T-pose hold (3) */
     double motion_s;              /* motion length (clipped to the motion's end) */
-    int32_t node_ids[MOCAP_SENSOR_COUNT];
+    /* The sensor set: sensor i rides on segment segments[i] and sends as node node_ids[i]
+     * (-1: it sends nothing). Blocks, truth columns and setup rotations follow this order.
+     * Default: the engine's default set (mocap_config_defaults). */
+    uint32_t sensor_count;        /* 1 .. MOCAP_MAX_SENSORS */
+    int32_t segments[MOCAP_MAX_SENSORS];
+    int32_t node_ids[MOCAP_MAX_SENSORS];
     uint8_t gateway_id;
     int32_t imusol_layout;        /* HIPNUC_LAYOUT_NODE_ID (0x62 always carries node ids) */
     int64_t start_receive_ns;     /* receive time of the first packet */
@@ -80,7 +90,7 @@ typedef struct synth_packet_info {
     int64_t receive_ns;
     double t;                  /* seconds since the start of the stream */
     int32_t phase;             /* 0 heading, 1 strapping, 2 T-pose, 3 motion */
-    uint32_t node_mask;        /* segments present in the packet */
+    uint32_t node_mask;        /* bit i: sensor i (config order) is present in the packet */
     int32_t intact;            /* no byte of this frame was corrupted */
     int32_t dropped;           /* the whole packet was lost (no bytes written) */
     size_t offset;             /* byte offset of the frame in the stream */
@@ -98,7 +108,8 @@ mocap_status synth_generate(const synth_config *cfg, synth_motion_fn motion, voi
                             synth_packet_fn on_packet, void *user);
 
 /* Convenience: generate straight into a capture file, and optionally a truth CSV with one line
- * per packet: "t_session phase q(w,x,y,z) a(x,y,z)" x 6 segments, t on the session clock. */
+ * per packet: "t_session phase q(w,x,y,z) a(x,y,z)" per configured sensor (config order, the
+ * header names each column by segment: pelvis_qw ...), t on the session clock. */
 mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion,
                                  void *motion_user, const char *capture_path,
                                  const char *truth_path);
@@ -107,9 +118,9 @@ mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion
 double synth_session_time(const synth_config *cfg, double t);
 
 /* The truth rotations of the generated setup (for tests): sensor world -> model frame and
- * sensor -> bone (mounting) for each segment. */
-void synth_setup_rotations(const synth_config *cfg, double world_to_model[MOCAP_SENSOR_COUNT][9],
-                           double sensor_to_bone[MOCAP_SENSOR_COUNT][9]);
+ * sensor -> bone (mounting) for each configured sensor (config order; the rest are zero). */
+void synth_setup_rotations(const synth_config *cfg, double world_to_model[MOCAP_MAX_SENSORS][9],
+                           double sensor_to_bone[MOCAP_MAX_SENSORS][9]);
 
 #ifdef __cplusplus
 }

@@ -4,7 +4,7 @@
  * positions of the crude kinematic chain below are differentiated exactly: accelerations are
  * the true second derivative of the positions, and angular velocity comes from dR/dt R^T with
  * no step size to tune. Motions are built from a small set of body parameters (root position,
- * pelvis angles, leg and arm angles, head angles); blending parameters with C2 weights keeps
+ * pelvis angles, leg and arm angles, head angles, the chest's twist and bend); blending parameters with C2 weights keeps
  * every transition smooth in position, velocity and acceleration. */
 #include "synth.h"
 
@@ -135,6 +135,7 @@ enum {
     P_THIGH_L, P_THIGH_R, P_SHIN_L, P_SHIN_R,
     P_ELEV_L, P_ELEV_R, P_SWING_L, P_SWING_R, P_TWIST_L, P_TWIST_R,
     P_HEAD_YAW, P_HEAD_PITCH,
+    P_CHEST_TWIST, P_CHEST_BEND,  /* upper trunk on the lumbar spine: about Y, then forward */
     P_COUNT
 };
 typedef struct body { jet p[P_COUNT]; } body;
@@ -149,6 +150,7 @@ typedef struct body { jet p[P_COUNT]; } body;
 #define SHOULDER_HEIGHT 0.48  /* above the hip centre */
 #define NECK_HEIGHT 0.56
 #define ARM_LEN 0.55          /* shoulder to wrist sensor */
+#define LUMBAR_HEIGHT 0.20    /* the joint the chest turns about, above the hip centre */
 #define FADE_S 1.0            /* cross-fade between motions */
 
 static void body_rest(body *b)
@@ -165,6 +167,7 @@ static void fill_bone(synth_pose *out, int seg, const jmat *r, const jet pos[3])
     mat3_to_quat(q, m);
     if (q[0] < 0.0) for (int i = 0; i < 4; i++) q[i] = -q[i];
     for (int i = 0; i < 4; i++) out->bone_quat[seg][i] = q[i];
+    out->segment_mask |= 1u << seg;
     /* dR/dt R^T is the skew matrix of the model-frame angular velocity. */
     mat3_multiply_transposed(w, md, m);
     out->angular_velocity[seg][0] = 0.5 * (w[7] - w[5]);
@@ -183,9 +186,20 @@ static void body_pose(const body *b, synth_pose *out)
     jmat tmp = jmat_mul(&yaw, &pitch);
     jmat pelvis = jmat_mul(&tmp, &roll);
     jet pos[3];
+    out->segment_mask = 0;
 
     jmat_place(pos, root, &pelvis, 0.0, 0.08, -0.12); /* on the sacrum */
     fill_bone(out, MOCAP_SEGMENT_PELVIS, &pelvis, pos);
+
+    /* The chest turns on the lumbar spine. The rest of the crude chain (shoulders, neck) stays
+     * on the pelvis frame, so adding the chest changes no other segment's motion. */
+    jet lumbar[3];
+    jmat_place(lumbar, root, &pelvis, 0.0, LUMBAR_HEIGHT, 0.0);
+    jmat ct = jmat_axis(1, p[P_CHEST_TWIST]), cb = jmat_axis(0, p[P_CHEST_BEND]);
+    tmp = jmat_mul(&pelvis, &ct);
+    jmat chest = jmat_mul(&tmp, &cb);
+    jmat_place(pos, lumbar, &chest, 0.0, 0.24, 0.11); /* on the sternum */
+    fill_bone(out, MOCAP_SEGMENT_CHEST, &chest, pos);
 
     jet neck[3];
     jmat_place(neck, root, &pelvis, 0.0, NECK_HEIGHT, 0.0);
@@ -255,6 +269,9 @@ static void raw_walk(double t, body *b)
     }
     p[P_HEAD_YAW] = jwave_deg(t, -5.0, f, 0.0);
     p[P_HEAD_PITCH] = jwave_deg(t, 2.0, 2.0 * f, 0.0);
+    /* The thorax counter-rotates against the pelvis and nods with each step. */
+    p[P_CHEST_TWIST] = jwave_deg(t, -9.0, f, 0.0);
+    p[P_CHEST_BEND] = jwave_deg(t, 2.0, 2.0 * f, 0.3);
 }
 
 static void raw_arms(double t, body *b)
@@ -279,6 +296,10 @@ static void raw_arms(double t, body *b)
     p[P_ROLL] = jwave_deg(t, 2.0, 0.4, 0.0);
     p[P_HEAD_YAW] = jwave_deg(t, 25.0, 0.25, 0.0);
     p[P_HEAD_PITCH] = jwave_deg(t, 8.0, 1.0 / 3.0, 0.0);
+    /* The chest follows the gaze a little and arches back as the arms go up. */
+    p[P_CHEST_TWIST] = jwave_deg(t, 10.0, 0.25, 0.0);
+    p[P_CHEST_BEND] = jscale(jsub(jcos(jscale(jtime(t), 2.0 * MOCAP_PI / 2.5)), jc(1.0)),
+                             3.0 * MOCAP_DEG2RAD);
 }
 
 static void raw_squat(double t, body *b)
@@ -301,6 +322,7 @@ static void raw_squat(double t, body *b)
     p[P_ROOT_Z] = jadd(jscale(jsin(thigh), THIGH_LEN), jscale(jsin(shin), SHIN_LEN));
     p[P_PITCH] = jscale(s, 25.0 * MOCAP_DEG2RAD);
     p[P_HEAD_PITCH] = jscale(s, -15.0 * MOCAP_DEG2RAD); /* keep looking ahead */
+    p[P_CHEST_BEND] = jscale(s, 12.0 * MOCAP_DEG2RAD);  /* the back rounds a little */
 }
 
 #define TURN_START 0.4
@@ -327,6 +349,7 @@ static void raw_turn(double t, body *b)
     p[P_ROOT_Y] = jsub(jc(ROOT_HEIGHT),
                        jmul(active, jscale(jsub(jc(1.0), jcos(jscale(phi, 2.0))), 0.005)));
     p[P_HEAD_YAW] = jscale(jbump(t, TURN_START, TURN_LEN), 20.0 * MOCAP_DEG2RAD); /* leads */
+    p[P_CHEST_TWIST] = jscale(jbump(t, TURN_START, TURN_LEN), 10.0 * MOCAP_DEG2RAD); /* so does the chest */
 }
 
 typedef void (*raw_fn)(double t, body *b);
@@ -417,17 +440,20 @@ synth_motion_fn synth_builtin_motion(const char *name)
 /* ------------------------------------------------------------------------------------------ */
 /* Trajectory files                                                                            */
 /* ------------------------------------------------------------------------------------------ */
-#define TRAJ_VALUES (1 + MOCAP_SENSOR_COUNT * 7)
+#define TRAJ_MAX_VALUES (1 + MOCAP_MAX_SENSORS * 7)
 
+/* Column group k of a line belongs to the file's segment k. */
 typedef struct traj_frame {
     double t;
-    double q[MOCAP_SENSOR_COUNT][4];
-    double a[MOCAP_SENSOR_COUNT][3];
-    double w[MOCAP_SENSOR_COUNT][3]; /* angular velocity estimated at load */
+    double q[MOCAP_MAX_SENSORS][4];
+    double a[MOCAP_MAX_SENSORS][3];
+    double w[MOCAP_MAX_SENSORS][3]; /* angular velocity estimated at load */
 } traj_frame;
 
 struct synth_trajectory {
     size_t count;
+    int segment_count;
+    int32_t segments[MOCAP_MAX_SENSORS];
     traj_frame frames[]; /* one allocation with the header */
 };
 
@@ -492,16 +518,17 @@ static mocap_status read_whole_file(const char *path, char **text, size_t *len)
     return MOCAP_OK;
 }
 
-/* Parses one line (already cut at '#' and NUL-terminated). Returns the number of values read,
- * or -1 when a token is not a finite number, TRAJ_VALUES + 1 when there are too many. */
-static int parse_line(char *line, double v[TRAJ_VALUES], char **bad)
+/* Parses one line (already cut at '#' and NUL-terminated) of at most `limit` values. Returns the
+ * number of values read, or -1 when a token is not a finite number, limit + 1 when there are
+ * too many. */
+static int parse_line(char *line, double *v, int limit, char **bad)
 {
     int n = 0;
     char *p = line;
     for (;;) {
         while (*p == ' ' || *p == '\t' || *p == '\r' || *p == ',') p++;
         if (!*p) return n;
-        if (n == TRAJ_VALUES) return TRAJ_VALUES + 1;
+        if (n == limit) return limit + 1;
         char *end = NULL;
         double x = text_strtod(p, &end);
         if (end == p || !isfinite(x) ||
@@ -512,6 +539,51 @@ static int parse_line(char *line, double v[TRAJ_VALUES], char **bad)
         v[n++] = x;
         p = end;
     }
+}
+
+/* 1 when the line's first word is "segments" (the header naming the file's segments). */
+static int is_segments_line(const char *line)
+{
+    while (*line == ' ' || *line == '\t') line++;
+    return strncmp(line, "segments", 8) == 0 &&
+           (line[8] == '\0' || line[8] == ' ' || line[8] == '\t' || line[8] == '\r');
+}
+
+/* "segments NAME NAME ...": the segment of each column group, by the names of the engine's
+ * table, each at most once. */
+static mocap_status parse_segments_line(char *line, int32_t segments[MOCAP_MAX_SENSORS],
+                                        int *count, const char *path, unsigned long line_no)
+{
+    char *p = strstr(line, "segments") + 8;
+    int n = 0;
+    for (;;) {
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == ',') p++;
+        if (!*p) break;
+        char *end = p;
+        while (*end && *end != ' ' && *end != '\t' && *end != '\r' && *end != ',') end++;
+        const char saved = *end;
+        *end = '\0';
+        const int32_t seg = mocap_segment_find(p);
+        if (seg < 0)
+            return mocap_fail(MOCAP_ERR_FORMAT, "trajectory file %s line %lu: unknown segment '%s'",
+                              path, line_no, p);
+        for (int k = 0; k < n; k++)
+            if (segments[k] == seg)
+                return mocap_fail(MOCAP_ERR_FORMAT,
+                                  "trajectory file %s line %lu: segment %s is named twice", path,
+                                  line_no, p);
+        if (n == MOCAP_MAX_SENSORS)
+            return mocap_fail(MOCAP_ERR_FORMAT, "trajectory file %s line %lu: more than %d segments",
+                              path, line_no, MOCAP_MAX_SENSORS);
+        segments[n++] = seg;
+        *end = saved;
+        p = end;
+    }
+    if (n == 0)
+        return mocap_fail(MOCAP_ERR_FORMAT, "trajectory file %s line %lu: the segments line names none",
+                          path, line_no);
+    *count = n;
+    return MOCAP_OK;
 }
 
 mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
@@ -533,6 +605,11 @@ mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
         return mocap_fail(MOCAP_ERR_NO_MEMORY, "trajectory file %s: out of memory", path);
     }
     traj->count = 0;
+    /* Without a segments line: the engine's default set, in its order. */
+    mocap_session_config defaults;
+    mocap_config_defaults(&defaults);
+    traj->segment_count = (int)defaults.sensor_count;
+    for (int k = 0; k < traj->segment_count; k++) traj->segments[k] = defaults.sensor_segments[k];
 
     char *line = text;
     unsigned long line_no = 0;
@@ -542,9 +619,21 @@ mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
         if (next) *next++ = '\0';
         char *hash = strchr(line, '#');
         if (hash) *hash = '\0';
-        double v[TRAJ_VALUES];
+        if (is_segments_line(line)) {
+            if (traj->count > 0) {
+                st = mocap_fail(MOCAP_ERR_FORMAT,
+                                "trajectory file %s line %lu: the segments line must come before "
+                                "the first sample", path, line_no);
+                break;
+            }
+            st = parse_segments_line(line, traj->segments, &traj->segment_count, path, line_no);
+            line = next;
+            continue;
+        }
+        const int expected = 1 + 7 * traj->segment_count;
+        double v[TRAJ_MAX_VALUES];
         char *bad = NULL;
-        int n = parse_line(line, v, &bad);
+        int n = parse_line(line, v, expected, &bad);
         if (n == 0) { line = next; continue; }
         if (n < 0) {
             char token[24];
@@ -558,12 +647,12 @@ mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
                             path, line_no, token);
             break;
         }
-        if (n != TRAJ_VALUES) {
+        if (n != expected) {
             st = mocap_fail(MOCAP_ERR_FORMAT,
                             "trajectory file %s line %lu: expected %d numbers (t, then qw qx qy qz "
-                            "ax ay az for 6 segments), found %s%d",
-                            path, line_no, TRAJ_VALUES, n > TRAJ_VALUES ? "more than " : "",
-                            n > TRAJ_VALUES ? TRAJ_VALUES : n);
+                            "ax ay az for %d segments), found %s%d",
+                            path, line_no, expected, traj->segment_count,
+                            n > expected ? "more than " : "", n > expected ? expected : n);
             break;
         }
         traj_frame *fr = &traj->frames[traj->count];
@@ -574,16 +663,16 @@ mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
                             path, line_no, fr->t, traj->frames[traj->count - 1].t);
             break;
         }
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+        for (int s = 0; s < traj->segment_count; s++) {
             const double *g = &v[1 + 7 * s];
             for (int i = 0; i < 4; i++) fr->q[s][i] = g[i];
             for (int i = 0; i < 3; i++) fr->a[s][i] = g[4 + i];
             double norm = quat_norm(fr->q[s]);
             if (!(norm > 0.5 && norm < 1.5)) {
                 st = mocap_fail(MOCAP_ERR_FORMAT,
-                                "trajectory file %s line %lu: quaternion of segment %d has norm %.6g "
+                                "trajectory file %s line %lu: quaternion of segment %s has norm %.6g "
                                 "(expected 1)",
-                                path, line_no, s, norm);
+                                path, line_no, mocap_segment_name(traj->segments[s]), norm);
                 break;
             }
             quat_normalize(fr->q[s]);
@@ -607,7 +696,7 @@ mocap_status synth_trajectory_load(const char *path, synth_trajectory **out)
     /* Angular velocity at each sample by central differences (one-sided at the ends). */
     for (size_t k = 0; k < traj->count; k++) {
         size_t lo = k > 0 ? k - 1 : k, hi = k + 1 < traj->count ? k + 1 : k;
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+        for (int s = 0; s < traj->segment_count; s++) {
             if (lo == hi) {
                 traj->frames[k].w[s][0] = traj->frames[k].w[s][1] = traj->frames[k].w[s][2] = 0.0;
                 continue;
@@ -638,6 +727,13 @@ double synth_motion_duration(synth_motion_fn motion, void *user, double limit)
 
 void synth_trajectory_free(synth_trajectory *traj) { free(traj); }
 
+uint32_t synth_trajectory_segment_mask(const synth_trajectory *traj)
+{
+    uint32_t mask = 0;
+    for (int k = 0; traj && k < traj->segment_count; k++) mask |= 1u << traj->segments[k];
+    return mask;
+}
+
 double synth_trajectory_duration(const synth_trajectory *traj)
 {
     if (!traj || traj->count == 0) return 0.0;
@@ -661,14 +757,17 @@ int synth_trajectory_motion(void *user, double t, synth_pose *out)
     double u = hi == lo ? 0.0 : (ft - f[lo].t) / (f[hi].t - f[lo].t);
     if (u < 0.0) u = 0.0;
     if (u > 1.0) u = 1.0;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
-        if (u == 0.0) quat_copy(out->bone_quat[s], f[lo].q[s]);
-        else if (u == 1.0) quat_copy(out->bone_quat[s], f[hi].q[s]);
-        else quat_slerp(out->bone_quat[s], f[lo].q[s], f[hi].q[s], u);
+    out->segment_mask = 0;
+    for (int s = 0; s < traj->segment_count; s++) {
+        const int seg = traj->segments[s];
+        if (u == 0.0) quat_copy(out->bone_quat[seg], f[lo].q[s]);
+        else if (u == 1.0) quat_copy(out->bone_quat[seg], f[hi].q[s]);
+        else quat_slerp(out->bone_quat[seg], f[lo].q[s], f[hi].q[s], u);
         for (int i = 0; i < 3; i++) {
-            out->accel[s][i] = f[lo].a[s][i] + u * (f[hi].a[s][i] - f[lo].a[s][i]);
-            out->angular_velocity[s][i] = f[lo].w[s][i] + u * (f[hi].w[s][i] - f[lo].w[s][i]);
+            out->accel[seg][i] = f[lo].a[s][i] + u * (f[hi].a[s][i] - f[lo].a[s][i]);
+            out->angular_velocity[seg][i] = f[lo].w[s][i] + u * (f[hi].w[s][i] - f[lo].w[s][i]);
         }
+        out->segment_mask |= 1u << seg;
     }
     return 0;
 }

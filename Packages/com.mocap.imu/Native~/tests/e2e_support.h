@@ -49,7 +49,7 @@ inline void add_realistic_noise(synth_config &cfg)
     cfg.still_tremor_deg = 0.2;
 }
 
-// Truth of every segment at session time t, interpolated between packets; phase of the nearer.
+// Truth of every segment (indexed by segment) at session time t, interpolated between packets; phase of the nearer.
 struct TruthTrack {
     std::vector<double> times;
     std::vector<int> phases;
@@ -72,7 +72,8 @@ struct TruthTrack {
         size_t lo = hi - 1;
         double u = (t - times[lo]) / (times[hi] - times[lo]);
         phase = u < 0.5 ? phases[lo] : phases[hi];
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        out.segment_mask = poses[lo].segment_mask & poses[hi].segment_mask;
+        for (int s = 0; s < MOCAP_MAX_SENSORS; ++s) {
             quat_slerp(out.bone_quat[s], poses[lo].bone_quat[s], poses[hi].bone_quat[s], u);
             for (int k = 0; k < 3; ++k)
                 out.accel[s][k] = poses[lo].accel[s][k] + u * (poses[hi].accel[s][k] - poses[lo].accel[s][k]);
@@ -81,10 +82,11 @@ struct TruthTrack {
     }
 };
 
+// Per sensor of the session (config order).
 struct ErrorStats {
-    std::vector<double> angles[MOCAP_SENSOR_COUNT];
-    double acc_sq[MOCAP_SENSOR_COUNT] = {};
-    double acc_truth_sq[MOCAP_SENSOR_COUNT] = {};
+    std::vector<double> angles[MOCAP_MAX_SENSORS];
+    double acc_sq[MOCAP_MAX_SENSORS] = {};
+    double acc_truth_sq[MOCAP_MAX_SENSORS] = {};
 
     void add(int s, double angle_deg, const float acc[3], const double truth_acc[3])
     {
@@ -113,18 +115,20 @@ struct ErrorStats {
     }
 };
 
-// Compares a frame's calibrated bones with the truth during the motion phase.
+// Compares a frame's calibrated bones with the truth of their segments during the motion phase.
 inline void score_frame(const TruthTrack &truth, const mocap_frame &f, ErrorStats &stats)
 {
     if (!(f.flags & MOCAP_FRAME_CALIBRATED)) return;
     synth_pose pose;
     int phase = -1;
     if (!truth.at(f.time_s, pose, phase) || phase != 3) return;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (uint32_t s = 0; s < f.sensor_count && s < MOCAP_MAX_SENSORS; ++s) {
         if (!(f.fresh_mask & (1u << s))) continue;
+        if (!(f.sensors[s].flags & MOCAP_SENSOR_CALIBRATED)) continue;
+        const int seg = f.sensors[s].segment;
         const float *q = f.sensors[s].bone_orientation;
         double qd[4] = {q[0], q[1], q[2], q[3]};
-        stats.add(s, quat_angle_deg(qd, pose.bone_quat[s]), f.sensors[s].bone_acceleration,
-                  pose.accel[s]);
+        stats.add((int)s, quat_angle_deg(qd, pose.bone_quat[seg]), f.sensors[s].bone_acceleration,
+                  pose.accel[seg]);
     }
 }

@@ -27,7 +27,9 @@ extern "C" {
 
 namespace {
 
-constexpr int N = MOCAP_SENSOR_COUNT;
+// The default set: six sensors, sensor i on segment i.
+constexpr int N = 6;
+const int32_t SEGMENTS[N] = {0, 1, 2, 3, 4, 5};
 constexpr uint32_t ALL = (1u << N) - 1u;
 constexpr double G = MOCAP_STANDARD_GRAVITY;
 
@@ -167,7 +169,7 @@ struct WindowResult {
 WindowResult run_window(Rig &rig, mocap_calibration &cal, const WindowSpec &spec)
 {
     static calib_accumulator acc; // large: keep it off the stack
-    calib_init(&acc);
+    calib_init(&acc, N, SEGMENTS, 0);
     calib_begin(&acc, spec.step, -1.0, (spec.frames - 1) / 60.0);
     double identity[N][9];
     for (auto &m : identity)
@@ -218,7 +220,7 @@ WindowResult run_window(Rig &rig, mocap_calibration &cal, const WindowSpec &spec
 
 void calibrate(Rig &rig, mocap_calibration &cal)
 {
-    calib_identity(&cal);
+    calib_identity(&cal, N, SEGMENTS);
     WindowSpec heading;
     WindowResult h = run_window(rig, cal, heading);
     ASSERT_EQ(h.status, MOCAP_OK) << h.report.reason;
@@ -248,7 +250,7 @@ void evaluate(Rig &rig, const mocap_calibration &cal, double &worst_deg, double 
                 c = 3.0 * mocap_rng_gaussian(&rig.rng);
         }
         raw_frame f = rig.body_frame(bones, acc, false);
-        calib_apply(&cal, rig.world_frame, &f, &out);
+        calib_apply(&cal, rig.world_frame, 0, &f, &out);
         for (int s = 0; s < N; s++) {
             if (only_sensor >= 0 && s != only_sensor)
                 continue;
@@ -269,13 +271,27 @@ bool contains(const char *text, const char *needle)
 
 } // namespace
 
+// The segment table as the header's enum and the default set see it: names, SMPL joints, default
+// node ids (the chest is in the table but not in the default set).
 TEST(Calibration, SegmentNames)
 {
-    const char *expect[N] = {"pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head"};
-    for (int s = 0; s < N; s++)
+    const char *expect[] = {"pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head",
+                            "chest"};
+    const int joints[] = {0, 20, 21, 4, 5, 15, 9};
+    const int nodes[] = {0, 1, 2, 3, 4, 5, -1};
+    ASSERT_EQ(mocap_segment_count(), 7);
+    for (int s = 0; s < 7; s++) {
         EXPECT_STREQ(mocap_segment_name(s), expect[s]);
+        EXPECT_EQ(mocap_segment_find(expect[s]), s);
+        EXPECT_EQ(mocap_segment_joint(s), joints[s]) << expect[s];
+        EXPECT_EQ(mocap_segment_default_node(s), nodes[s]) << expect[s];
+    }
+    EXPECT_EQ(MOCAP_SEGMENT_CHEST, 6);
     EXPECT_EQ(mocap_segment_name(-1), nullptr);
-    EXPECT_EQ(mocap_segment_name(N), nullptr);
+    EXPECT_EQ(mocap_segment_name(mocap_segment_count()), nullptr);
+    EXPECT_EQ(mocap_segment_find("Chest"), -1); // exact, lower case
+    EXPECT_EQ(mocap_segment_find("spine"), -1);
+    EXPECT_EQ(mocap_segment_joint(7), -1);
 }
 
 // Bound: each calibration window averages 180 frames of 0.2 deg (per axis) orientation noise, so
@@ -307,7 +323,7 @@ TEST(Calibration, RecoversBonesInNwuAndEnuWorlds)
             for (auto &m : id)
                 mat3_identity(m);
             raw_frame f = rig.body_frame(id, zero, false);
-            calib_apply(&cal, world, &f, &out);
+            calib_apply(&cal, world, 0, &f, &out);
             EXPECT_EQ(out.flags, (uint32_t)(MOCAP_FRAME_CALIBRATED | MOCAP_FRAME_COMPLETE));
             for (int s = 0; s < N; s++) {
                 EXPECT_EQ(out.sensors[s].flags,
@@ -413,7 +429,7 @@ TEST(Calibration, RefusesTposeWithoutHeading)
 {
     Rig rig(25, MOCAP_WORLD_NWU);
     static mocap_calibration cal, before;
-    calib_identity(&cal);
+    calib_identity(&cal, N, SEGMENTS);
     cal.heading_mask = ALL & ~(1u << MOCAP_SEGMENT_LEFT_SHIN);
     before = cal;
     WindowSpec spec;
@@ -429,7 +445,7 @@ TEST(Calibration, RefusesHeadingResetBeforeCalibrationAndEmptyWindow)
 {
     Rig rig(26, MOCAP_WORLD_NWU);
     static mocap_calibration cal;
-    calib_identity(&cal);
+    calib_identity(&cal, N, SEGMENTS);
     WindowSpec spec;
     spec.step = MOCAP_CALIBRATION_HEADING_RESET;
     WindowResult r = run_window(rig, cal, spec);
@@ -438,7 +454,7 @@ TEST(Calibration, RefusesHeadingResetBeforeCalibrationAndEmptyWindow)
 
     // A window scheduled entirely in the past closes at the first frame with nothing in it.
     static calib_accumulator acc;
-    calib_init(&acc);
+    calib_init(&acc, N, SEGMENTS, 0);
     calib_begin(&acc, MOCAP_CALIBRATION_HEADING, 0.0, 1.0);
     rig.set_time(5.0);
     double id[N][9], zero[N][3] = {};
@@ -457,7 +473,7 @@ TEST(Calibration, LongWindowSpreadUsesWholeWindow)
     // orientations: the spread must still describe the whole window, not its first part.
     Rig rig(27, MOCAP_WORLD_NWU);
     static mocap_calibration cal;
-    calib_identity(&cal);
+    calib_identity(&cal, N, SEGMENTS);
     WindowSpec spec;
     spec.frames = 2400;
     spec.spin_sensor = MOCAP_SEGMENT_HEAD;
@@ -535,7 +551,7 @@ TEST(Calibration, ApplyFlagsAndUncalibratedPreview)
 {
     for (int world : {MOCAP_WORLD_NWU, MOCAP_WORLD_ENU}) {
         static mocap_calibration cal;
-        calib_identity(&cal);
+        calib_identity(&cal, N, SEGMENTS);
         raw_frame f;
         std::memset(&f, 0, sizeof f);
         f.t = 1.5;
@@ -554,7 +570,7 @@ TEST(Calibration, ApplyFlagsAndUncalibratedPreview)
             f.node_id[s] = 40 + s;
         }
         static mocap_frame out;
-        calib_apply(&cal, world, &f, &out);
+        calib_apply(&cal, world, 0, &f, &out);
         EXPECT_EQ(out.flags, 0u);
         EXPECT_EQ(out.fresh_mask, f.fresh_mask);
         EXPECT_EQ(out.sensors[0].flags, (uint32_t)MOCAP_SENSOR_VALID);
@@ -581,7 +597,7 @@ TEST(Calibration, ApplyFlagsAndUncalibratedPreview)
         EXPECT_EQ(out.sensors[5].bone_orientation[3], 0.0f);
         // Fresh and complete: the COMPLETE flag.
         f.valid_mask = f.fresh_mask = ALL;
-        calib_apply(&cal, world, &f, &out);
+        calib_apply(&cal, world, 0, &f, &out);
         EXPECT_EQ(out.flags, (uint32_t)MOCAP_FRAME_COMPLETE);
     }
 }
@@ -589,7 +605,7 @@ TEST(Calibration, ApplyFlagsAndUncalibratedPreview)
 TEST(Calibration, ProgressReport)
 {
     static calib_accumulator acc;
-    calib_init(&acc);
+    calib_init(&acc, N, SEGMENTS, 0);
     Rig rig(41, MOCAP_WORLD_NWU);
     calib_begin(&acc, MOCAP_CALIBRATION_TPOSE, 1.0, 2.0);
     mocap_calibration_report report;
@@ -626,7 +642,7 @@ TEST(Calibration, ProgressReport)
     EXPECT_GT(t_half_checked, 0.0);
     EXPECT_EQ(acc.frames, 121u); // frames from t = 1.0 to 3.0 at 60 Hz, both ends inside
     static mocap_calibration cal;
-    calib_identity(&cal);
+    calib_identity(&cal, N, SEGMENTS);
     calib_finish(&acc, &cal, &report); // refused: no heading
     mocap_calibration_report after = report;
     calib_progress(&acc, 10.0, &after);
@@ -739,8 +755,12 @@ TEST(CalibrationFile, SaveLoadRoundTrip)
     }
     // %.9g round-trips floats bit for bit.
     EXPECT_EQ(std::memcmp(loaded.world_to_model, cal.world_to_model, sizeof cal.world_to_model), 0);
+    EXPECT_EQ(loaded.sensor_count, (uint32_t)N);
+    for (int s = 0; s < N; s++) EXPECT_EQ(loaded.segments[s], SEGMENTS[s]);
     std::string text = read_text(path);
-    EXPECT_EQ(text.rfind("mocap-calibration 1\n", 0), 0u);
+    EXPECT_EQ(text.rfind("mocap-calibration 2\n", 0), 0u);
+    EXPECT_NE(text.find("\nsensors pelvis left_wrist right_wrist left_shin right_shin head\n"),
+              std::string::npos) << text;
     EXPECT_EQ(temporaries_in(std::filesystem::path(path).parent_path()), 0); // none left behind
 
     // Windows line endings, comments and blank lines are accepted.
@@ -757,10 +777,41 @@ TEST(CalibrationFile, SaveLoadRoundTrip)
     EXPECT_EQ(std::memcmp(&again, &loaded, sizeof again), 0);
 
     // Saving an identity calibration (what a fresh session holds) works as well.
-    calib_identity(&cal);
+    calib_identity(&cal, N, SEGMENTS);
     EXPECT_EQ(calib_save(&cal, path.c_str()), MOCAP_OK) << mocap_last_error();
     EXPECT_EQ(calib_load(path.c_str(), &again), MOCAP_OK) << mocap_last_error();
     EXPECT_EQ(again.valid_mask, 0u);
+}
+
+// A version-1 file (before sensor sets: no sensors line) still loads, as the six of the default
+// set in segment order, with every value it holds.
+TEST(CalibrationFile, VersionOneLoadsAsTheSix)
+{
+    Rig rig(54, MOCAP_WORLD_NWU);
+    static mocap_calibration cal, loaded;
+    calibrate(rig, cal);
+    std::string path = test_temp_path("cal.txt");
+    ASSERT_EQ(calib_save(&cal, path.c_str()), MOCAP_OK) << mocap_last_error();
+    std::string v1 = replace_line(read_text(path), "mocap-calibration", "mocap-calibration 1");
+    v1 = replace_line(v1, "sensors ", "");
+    ASSERT_EQ(v1.find("sensors"), std::string::npos);
+    std::string old = test_temp_path("old.txt");
+    write_text(old, v1);
+    std::memset(&loaded, 0x5c, sizeof loaded);
+    ASSERT_EQ(calib_load(old.c_str(), &loaded), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(loaded.sensor_count, 6u);
+    for (int s = 0; s < 6; s++) EXPECT_EQ(loaded.segments[s], s);
+    EXPECT_EQ(loaded.valid_mask, 0x3fu);
+    EXPECT_EQ(loaded.heading_mask, 0x3fu);
+    EXPECT_EQ(std::memcmp(loaded.world_to_model, cal.world_to_model, 6 * sizeof cal.world_to_model[0]), 0);
+    EXPECT_EQ(std::memcmp(loaded.sensor_to_bone, cal.sensor_to_bone, 6 * sizeof cal.sensor_to_bone[0]), 0);
+    EXPECT_EQ(std::memcmp(loaded.acceleration_offset, cal.acceleration_offset,
+                          6 * sizeof cal.acceleration_offset[0]), 0);
+    // A version-1 file has no sensors line: one there is not a key it knows.
+    std::string mixed = replace_line(read_text(path), "mocap-calibration", "mocap-calibration 1");
+    write_text(old, mixed);
+    EXPECT_EQ(calib_load(old.c_str(), &loaded), MOCAP_ERR_FORMAT);
+    EXPECT_TRUE(contains(mocap_last_error(), "old.txt")) << mocap_last_error();
 }
 
 // Paths are UTF-8 (a user folder such as "Jürgen"); a save that cannot replace its target
@@ -835,12 +886,20 @@ TEST(CalibrationFile, CorruptFilesRejectedWithLineNumbers)
         std::string expect1, expect2;
     };
     std::vector<Case> cases;
-    cases.push_back({replace_line(good, "mocap-calibration", "mocap-calibration 2"), "line 1",
+    cases.push_back({replace_line(good, "mocap-calibration", "mocap-calibration 3"), "line 1",
                      "version"});
+    int sensors_line = 0;
+    std::string t = replace_line(good, "sensors", "sensors pelvis left_wrist spine left_shin right_shin head",
+                                 &sensors_line);
+    cases.push_back({t, "line " + std::to_string(sensors_line), "spine"});
+    t = replace_line(good, "sensors", "sensors pelvis left_wrist pelvis left_shin right_shin head");
+    cases.push_back({t, "line " + std::to_string(sensors_line), "twice"});
+    t = replace_line(good, "sensors", "");
+    cases.push_back({t, "line " + std::to_string(sensors_line), "sensors"});
     cases.push_back({replace_line(good, "mocap-calibration", "hello world"), "line 1",
                      "not a calibration file"});
     int ln = 0;
-    std::string t = replace_line(good, "left_wrist.sensor_to_bone",
+    t = replace_line(good, "left_wrist.sensor_to_bone",
                                  "left_wrist.sensor_to_bone 1 0 0 0 nan 0 0 0 1", &ln);
     cases.push_back({t, "line " + std::to_string(ln), "left_wrist.sensor_to_bone"});
     t = replace_line(good, "head.acceleration_offset", "", &ln);

@@ -6,6 +6,7 @@
 #include "error.h"
 #include "hipnuc_decoder.h"
 #include "platform.h"
+#include "sensor_set.h"
 #include "solver.h"
 
 #if defined(_WIN32)
@@ -225,10 +226,32 @@ typedef struct bench_ctx {
     double pipeline_fps;     /* poses/s of one character (0 until measured) */
 } bench_ctx;
 
+/* The benchmark's sensor set into a session config, with the model's optional sensors. */
+static void use_sensor_set(const bench_ctx *b, mocap_session_config *cfg)
+{
+    if (b->o->sensor_count > 0) {
+        cfg->sensor_count = b->o->sensor_count;
+        for (uint32_t i = 0; i < b->o->sensor_count; ++i) {
+            cfg->sensor_segments[i] = b->o->sensor_segments[i];
+            cfg->node_ids[i] = b->o->node_ids[i];
+        }
+        cfg->optional_mask = b->o->optional_mask;
+    }
+    sensor_set_apply_model(cfg, &b->info);
+}
+
 static mocap_status make_capture(bench_ctx *b)
 {
     synth_config cfg;
     synth_config_defaults(&cfg);
+    mocap_session_config set;
+    mocap_config_defaults(&set);
+    use_sensor_set(b, &set);
+    cfg.sensor_count = set.sensor_count;
+    for (uint32_t i = 0; i < set.sensor_count; ++i) {
+        cfg.segments[i] = set.sensor_segments[i];
+        cfg.node_ids[i] = set.node_ids[i];
+    }
     cfg.seed = 11;
     cfg.motion_s = b->o->seconds;
     cfg.acc_noise_g = 0.01;
@@ -244,6 +267,7 @@ static mocap_status open_replay(bench_ctx *b, int with_calibration, mocap_sessio
 {
     mocap_session_config cfg;
     mocap_config_defaults(&cfg);
+    use_sensor_set(b, &cfg);
     cfg.source_kind = MOCAP_SOURCE_REPLAY;
     snprintf(cfg.path, sizeof cfg.path, "%.240s", b->capture);
     cfg.output_rate_hz = b->info.frame_rate;
@@ -278,8 +302,11 @@ static mocap_status calibrate_once(bench_ctx *b)
         if (n == 0) mocap_sleep_ms(1);
     }
     if (st == MOCAP_OK) st = mocap_calibration_get(s, &b->cal);
-    if (st == MOCAP_OK && b->cal.valid_mask != (1u << MOCAP_SENSOR_COUNT) - 1)
-        st = mocap_fail(MOCAP_ERR_BAD_CALIBRATION, "bench: the capture's calibration was refused");
+    mocap_calibration_report rep;
+    if (st == MOCAP_OK) st = mocap_calibration_get_step_report(s, MOCAP_CALIBRATION_TPOSE, &rep);
+    if (st == MOCAP_OK && rep.state != MOCAP_CALIBRATION_ACCEPTED)
+        st = mocap_fail(MOCAP_ERR_BAD_CALIBRATION, "bench: the capture's calibration was refused: %s",
+                        rep.reason);
     mocap_session_close(s);
     return st;
 }
@@ -431,6 +458,7 @@ static int bench_latency(bench_ctx *b)
     const double seconds = b->o->latency_seconds > 0 ? b->o->latency_seconds : 10.0;
     mocap_session_config cfg;
     mocap_config_defaults(&cfg);
+    use_sensor_set(b, &cfg);
     cfg.source_kind = MOCAP_SOURCE_SERIAL;
     snprintf(cfg.path, sizeof cfg.path, "%s", name);
     cfg.output_rate_hz = b->info.frame_rate;

@@ -2,6 +2,10 @@
 #ifndef MOCAPCTL_BENCH_H
 #define MOCAPCTL_BENCH_H
 
+#include <stdint.h>
+
+#include "mocap_imu.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -32,6 +36,12 @@ typedef struct mocapctl_bench_options {
     double tip_seconds;         /* seconds per model in the TIP comparison (3) */
     int threads;                /* ONNX Runtime intra-op threads in the TIP comparison (1) */
     int max_characters;         /* scaling stops above this (32) */
+    /* The sensors of the generated capture and of the sessions (sensor_count 0: the default
+     * set); the model's optional sensors become optional. */
+    uint32_t sensor_count;
+    int32_t sensor_segments[MOCAP_MAX_SENSORS];
+    int32_t node_ids[MOCAP_MAX_SENSORS];
+    uint32_t optional_mask;
 } mocapctl_bench_options;
 
 int mocapctl_bench_model(const char *which, const mocapctl_bench_options *options);

@@ -7,10 +7,15 @@
 
 void calibration_print_quality(const mocap_calibration_report *rep)
 {
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (uint32_t s = 0; s < rep->sensor_count && s < MOCAP_MAX_SENSORS; ++s) {
         const mocap_sensor_quality *q = &rep->sensors[s];
+        const char *name = mocap_segment_name(q->segment);
+        if (q->left_out) {
+            printf("    %-12s left out (optional, sent nothing)\n", name ? name : "?");
+            continue;
+        }
         printf("    %-12s %s  gyro %5.2f deg/s  spread %5.2f deg  |g| err %5.2f m/s^2",
-               mocap_segment_name(s), q->ok ? "ok  " : "BAD ", q->gyro_rms_dps,
+               name ? name : "?", q->ok ? "ok  " : "BAD ", q->gyro_rms_dps,
                q->orientation_spread_deg, q->accel_norm_error);
         /* Tilt is a check of the heading step only (sensors must lie flat). */
         if (rep->step == MOCAP_CALIBRATION_HEADING) printf("  tilt %5.1f deg", q->tilt_deg);

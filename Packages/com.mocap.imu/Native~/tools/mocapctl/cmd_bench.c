@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "mocap_imu.h"
 #include "pose_model.h"
+#include "sensor_set.h"
 
 int cmd_bench_decode(int argc, char **argv)
 {
@@ -50,5 +51,14 @@ int cmd_bench(int argc, char **argv)
     o.tip_seconds = cli_number(argc, argv, "--tip-seconds", 3.0, 0.1, 86400.0);
     o.threads = (int)cli_integer(argc, argv, "--threads", 1, 1, 256);
     o.max_characters = (int)cli_integer(argc, argv, "--max-characters", 32, 1, MOCAP_MAX_CHARACTERS);
+    mocap_session_config set;
+    mocap_config_defaults(&set);
+    if (sensor_set_from_args(argc, argv, &set) != 0) return 2;
+    o.sensor_count = set.sensor_count;
+    for (uint32_t i = 0; i < set.sensor_count; ++i) {
+        o.sensor_segments[i] = set.sensor_segments[i];
+        o.node_ids[i] = set.node_ids[i];
+    }
+    o.optional_mask = set.optional_mask;
     return mocapctl_bench_model(which, &o);
 }

@@ -90,22 +90,23 @@ int cmd_live(int argc, char **argv)
     mocap_model_info info;
     /* The model first: the session's output rate is the model's frame rate. */
     if (with_model && pose_model_open(cli_value(argc, argv, "--model"), &model, &info) != 0) return 1;
-    if (live_session_open("live", argc, argv, record, model ? info.frame_rate : 0.0f, &session) != 0) {
+    if (live_session_open("live", argc, argv, record, model ? info.frame_rate : 0.0f,
+                          model ? &info : NULL, &session) != 0) {
         mocap_model_close(model);
         return 1;
     }
     int rc = 0;
     for (int attempt = 0; attempt < 3; ++attempt) {
         rc = live_session_guided_step(session, MOCAP_CALIBRATION_HEADING,
-                                      "Heading step: lay all six sensors still on a flat surface, X "
+                                      "Heading step: lay all the sensors still on a flat surface, X "
                                       "axis (the arrow) pointing where you will face, Z up.", 3.0f);
         if (rc == 0 || rc == GUIDED_STEP_NO_FRAMES || mocapctl_interrupted) break;
     }
     for (int attempt = 0; rc == 0 && attempt < 3; ++attempt) {
         rc = live_session_guided_step(session, MOCAP_CALIBRATION_TPOSE,
-                                      "T-pose step: strap the sensors on (pelvis, wrists, shins, "
-                                      "head), face the same way, arms straight out to the sides, "
-                                      "stand still.", 3.0f);
+                                      "T-pose step: strap the sensors on (each on its segment, as "
+                                      "listed above), face the same way, arms straight out to the "
+                                      "sides, stand still.", 3.0f);
         if (rc == 0 || rc == GUIDED_STEP_NO_FRAMES || mocapctl_interrupted) break;
     }
     if (rc == 0) printf("\nCalibrated. Streaming; Ctrl-C to stop.\n");

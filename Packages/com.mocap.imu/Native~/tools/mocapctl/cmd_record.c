@@ -15,7 +15,7 @@ int cmd_record(int argc, char **argv)
     static const char *const record_outputs[] = {"--out", NULL};
     cli_refuse_overwriting(cli_value(argc, argv, "--port"), "serial port", argc, argv, record_outputs);
     mocap_session *session = NULL;
-    if (live_session_open("record", argc, argv, out, 0.0f, &session) != 0) return 1;
+    if (live_session_open("record", argc, argv, out, 0.0f, NULL, &session) != 0) return 1;
     printf("recording to %s; Ctrl-C to stop\n", out);
     live_session_show_status(session, limit);
     /* Stop first: the final flush and the close are where a full disk often shows. */

@@ -16,6 +16,7 @@
 #include "pose_truth.h"
 #include "replay_session.h"
 #include "report.h"
+#include "sensor_set.h"
 #include "sensor_truth.h"
 
 #define DRAIN_CAPACITY 256
@@ -44,7 +45,7 @@ typedef struct replay_state {
     sensor_truth truth;
     int have_truth;
     FILE *csv;
-    sensor_summary sensors[MOCAP_SENSOR_COUNT];
+    sensor_summary sensors[MOCAP_MAX_SENSORS]; /* config order */
     uint64_t frames;
     uint64_t calibrated_frames;
     double first_t, last_t;
@@ -60,17 +61,21 @@ static void account_frame(replay_state *st, const mocap_frame *f)
     sensor_truth_row truth;
     int have = st->have_truth && (f->flags & MOCAP_FRAME_CALIBRATED) &&
                sensor_truth_at(&st->truth, f->time_s, &truth) == 0 && truth.phase == 3;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    const uint32_t sensors = f->sensor_count < MOCAP_MAX_SENSORS ? f->sensor_count : MOCAP_MAX_SENSORS;
+    for (uint32_t s = 0; s < sensors; ++s) {
         const mocap_sensor_frame *sf = &f->sensors[s];
         sensor_summary *sum = &st->sensors[s];
+        const int seg = sf->segment;
         sum->frames++;
         if (f->fresh_mask & (1u << s)) sum->fresh++;
         if (sf->flags & MOCAP_SENSOR_HELD) sum->held++;
         if (sf->flags & MOCAP_SENSOR_STALE) sum->stale++;
-        if (have) {
+        /* A sensor left out of the calibration, or whose segment the truth lacks, is not scored. */
+        if (have && (sf->flags & MOCAP_SENSOR_CALIBRATED) && seg >= 0 && seg < MOCAP_MAX_SENSORS &&
+            ((st->truth.segment_mask >> seg) & 1u)) {
             double q[4] = {sf->bone_orientation[0], sf->bone_orientation[1],
                            sf->bone_orientation[2], sf->bone_orientation[3]};
-            double angle = quat_angle_deg(q, truth.q[s]);
+            double angle = quat_angle_deg(q, truth.q[seg]);
             sum->angle_sum += angle;
             sum->angle_sq += angle * angle;
             if (angle > sum->angle_max) sum->angle_max = angle;
@@ -79,7 +84,7 @@ static void account_frame(replay_state *st, const mocap_frame *f)
             sum->histogram[bin]++;
             double e2 = 0;
             for (int k = 0; k < 3; ++k) {
-                double d = sf->bone_acceleration[k] - truth.a[s][k];
+                double d = sf->bone_acceleration[k] - truth.a[seg][k];
                 e2 += d * d;
             }
             sum->acc_err_sq += e2;
@@ -88,7 +93,7 @@ static void account_frame(replay_state *st, const mocap_frame *f)
     }
     if (st->csv) {
         fprintf(st->csv, "%llu,%.6f,%u", (unsigned long long)f->sequence, f->time_s, f->flags);
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        for (uint32_t s = 0; s < sensors; ++s) {
             const mocap_sensor_frame *sf = &f->sensors[s];
             fprintf(st->csv, ",%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%u", sf->bone_orientation[0],
                     sf->bone_orientation[1], sf->bone_orientation[2], sf->bone_orientation[3],
@@ -145,13 +150,14 @@ static void print_summary(const replay_state *st, const mocap_session_config *cf
     printf("  %llu output frames at %.0f Hz over %.2f s, %llu calibrated\n",
            (unsigned long long)st->frames, cfg->output_rate_hz, st->last_t - st->first_t,
            (unsigned long long)st->calibrated_frames);
-    printf("  %-12s %8s %8s %8s", "sensor", "fresh%", "held", "stale");
+    printf("  %-12s %5s %8s %8s %8s", "sensor", "node", "fresh%", "held", "stale");
     if (st->have_truth) printf(" %10s %10s %10s %12s", "mean deg", "p95 deg", "max deg", "acc rms m/s2");
     printf("\n");
     double worst_mean = 0;
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; ++i) {
+    for (uint32_t i = 0; i < cfg->sensor_count && i < MOCAP_MAX_SENSORS; ++i) {
         const sensor_summary *sum = &st->sensors[i];
-        printf("  %-12s %7.1f%% %8llu %8llu", mocap_segment_name(i),
+        printf("  %-12s %5d %7.1f%% %8llu %8llu", mocap_segment_name(cfg->sensor_segments[i]),
+               (int)cfg->node_ids[i],
                sum->frames ? 100.0 * (double)sum->fresh / (double)sum->frames : 0.0,
                (unsigned long long)sum->held, (unsigned long long)sum->stale);
         if (st->have_truth && sum->compared) {
@@ -198,6 +204,12 @@ int cmd_replay(int argc, char **argv)
         if (sensor_truth_load(truth_path, &st->truth) != 0) goto done;
         st->have_truth = 1;
     }
+    mocap_session_config cfg;
+    mocap_config_defaults(&cfg);
+    if (sensor_set_from_args(argc, argv, &cfg) != 0) {
+        rc = 2;
+        goto done;
+    }
     if (csv_path) {
         st->csv = mocap_fopen(csv_path, "w");
         if (!st->csv) {
@@ -205,15 +217,13 @@ int cmd_replay(int argc, char **argv)
             goto done;
         }
         fprintf(st->csv, "sequence,time_s,flags");
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
-            const char *n = mocap_segment_name(s);
+        for (uint32_t s = 0; s < cfg.sensor_count; ++s) {
+            const char *n = mocap_segment_name(cfg.sensor_segments[s]);
             fprintf(st->csv, ",%s_qw,%s_qx,%s_qy,%s_qz,%s_ax,%s_ay,%s_az,%s_flags", n, n, n, n, n, n, n, n);
         }
         fputc('\n', st->csv);
     }
 
-    mocap_session_config cfg;
-    mocap_config_defaults(&cfg);
     cfg.source_kind = MOCAP_SOURCE_REPLAY;
     snprintf(cfg.path, sizeof cfg.path, "%s", capture);
     cfg.replay_realtime = cli_flag(argc, argv, "--realtime");

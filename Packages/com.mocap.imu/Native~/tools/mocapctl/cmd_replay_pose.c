@@ -25,6 +25,7 @@
 #include "pose_truth.h"
 #include "replay_session.h"
 #include "report.h"
+#include "sensor_set.h"
 
 #define POSE_DRAIN 256
 
@@ -104,6 +105,9 @@ int cmd_replay_pose(int argc, char **argv)
     mocap_model_info info;
     mocap_status s;
 
+    mocap_session_config cfg;
+    mocap_config_defaults(&cfg);
+    if (sensor_set_from_args(argc, argv, &cfg) != 0) return 2;
     /* The solver consumes the frames, at the model's rate. */
     cli_refuse_options(argc, argv, "--csv", "(sensor frames) is not written with the pose model; use --pose-csv");
     cli_refuse_options(argc, argv, "--rate", "does not apply with the pose model: frames come at its rate");
@@ -160,8 +164,7 @@ int cmd_replay_pose(int argc, char **argv)
         pose_write_csv_header(csv, &info);
     }
 
-    mocap_session_config cfg;
-    mocap_config_defaults(&cfg);
+    sensor_set_apply_model(&cfg, &info);
     cfg.source_kind = MOCAP_SOURCE_REPLAY;
     snprintf(cfg.path, sizeof cfg.path, "%s", capture);
     cfg.replay_realtime = cli_flag(argc, argv, "--realtime");

@@ -12,6 +12,7 @@
 #include "pose_model.h"
 #include "replay_session.h"
 #include "report.h"
+#include "sensor_set.h"
 
 #define STREAM_MAX 16
 #define POSE_DRAIN 256
@@ -31,6 +32,9 @@ int cmd_stream(int argc, char **argv)
     const char *prelude = cli_value(argc, argv, "--prelude");
     mocap_solver_config solver_config;
     if (cli_smoothing(argc, argv, &solver_config) != 0) return 2;
+    mocap_session_config sensor_check;
+    mocap_config_defaults(&sensor_check);
+    if (sensor_set_from_args(argc, argv, &sensor_check) != 0) return 2; /* before any socket */
     if (ndest < 0 || nrep < 0) {
         fprintf(stderr, "mocapctl: at most %d --vmc and --replay\n", STREAM_MAX);
         return 2;
@@ -84,9 +88,9 @@ int cmd_stream(int argc, char **argv)
     if (!poses) goto done;
 
     if (port) {
-        if (live_session_open("stream", argc, argv, NULL, info.frame_rate, &sessions[0]) != 0) goto done;
+        if (live_session_open("stream", argc, argv, NULL, info.frame_rate, &info, &sessions[0]) != 0) goto done;
         int cal = live_session_guided_step(sessions[0], MOCAP_CALIBRATION_HEADING,
-                                           "Heading step: lay all six sensors still on a flat "
+                                           "Heading step: lay all the sensors still on a flat "
                                            "surface, X axis (the arrow) pointing where you will "
                                            "face, Z up.", 3.0f);
         if (cal == 0)
@@ -98,6 +102,11 @@ int cmd_stream(int argc, char **argv)
         for (int i = 0; i < nrep; ++i) {
             mocap_session_config cfg;
             mocap_config_defaults(&cfg);
+            if (sensor_set_from_args(argc, argv, &cfg) != 0) {
+                rc = 2;
+                goto done;
+            }
+            sensor_set_apply_model(&cfg, &info);
             cfg.source_kind = MOCAP_SOURCE_REPLAY;
             snprintf(cfg.path, sizeof cfg.path, "%s", replays[i]);
             /* The session runs ahead (a fast replay waits when its queues are full, so nothing

@@ -6,6 +6,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "report.h"
+#include "sensor_set.h"
 #include "synth.h"
 
 int cmd_synth(int argc, char **argv)
@@ -41,6 +42,18 @@ int cmd_synth(int argc, char **argv)
     }
     cfg.corrupt_byte_prob = cli_number(argc, argv, "--corrupt", cfg.corrupt_byte_prob, 0.0, 1.0);
     cfg.node_dropout_prob = cli_number(argc, argv, "--dropout", cfg.node_dropout_prob, 0.0, 1.0);
+    /* The capture's sensors: the session's set (its '?' marks only matter to sessions). */
+    mocap_session_config set;
+    mocap_config_defaults(&set);
+    if (sensor_set_from_args(argc, argv, &set) != 0) return 2;
+    cfg.sensor_count = set.sensor_count;
+    for (uint32_t i = 0; i < set.sensor_count; ++i) {
+        cfg.segments[i] = set.sensor_segments[i];
+        cfg.node_ids[i] = set.node_ids[i];
+    }
+    set.optional_mask = 0;
+    char described[512];
+    sensor_set_describe(&set, described, sizeof described);
 
     synth_trajectory *traj = NULL;
     synth_motion_fn motion = NULL;
@@ -65,9 +78,9 @@ int cmd_synth(int argc, char **argv)
     mocap_status st = synth_write_capture(&cfg, motion, motion_user, out, truth);
     synth_trajectory_free(traj);
     if (st != MOCAP_OK) return report_failure(st, "writing capture");
-    printf("wrote %s: %.1f s prelude (heading %.1f s, strap %.1f s, T-pose %.1f s) then %.1f s of "
-           "%s, %s world, seed %llu%s%s\n",
-           out, cfg.heading_s + cfg.strap_s + cfg.tpose_s, cfg.heading_s, cfg.strap_s, cfg.tpose_s,
+    printf("wrote %s: %u sensors (%s), %.1f s prelude (heading %.1f s, strap %.1f s, T-pose %.1f s) "
+           "then %.1f s of %s, %s world, seed %llu%s%s\n",
+           out, (unsigned)cfg.sensor_count, described, cfg.heading_s + cfg.strap_s + cfg.tpose_s, cfg.heading_s, cfg.strap_s, cfg.tpose_s,
            cfg.motion_s < motion_length ? cfg.motion_s : motion_length,
            traj_path ? "the trajectory" : motion_name ? motion_name : "mixed",
            cfg.world_frame == MOCAP_WORLD_ENU ? "ENU" : "NWU",

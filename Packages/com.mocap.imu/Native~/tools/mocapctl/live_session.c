@@ -9,11 +9,12 @@
 #include "interrupt.h"
 #include "platform.h"
 #include "report.h"
+#include "sensor_set.h"
 
 #define NO_FRAMES_LIMIT_S 5.0
 
 int live_session_open(const char *command, int argc, char **argv, const char *record_path,
-                      float rate_hz, mocap_session **out)
+                      float rate_hz, const mocap_model_info *model, mocap_session **out)
 {
     const char *port = cli_value(argc, argv, "--port");
     if (!port) return mocapctl_usage_error(command);
@@ -23,6 +24,8 @@ int live_session_open(const char *command, int argc, char **argv, const char *re
     const char *baud = cli_value(argc, argv, "--baud");
     mocap_session_config cfg;
     mocap_config_defaults(&cfg);
+    if (sensor_set_from_args(argc, argv, &cfg) != 0) return 2;
+    if (model) sensor_set_apply_model(&cfg, model);
     cfg.source_kind = MOCAP_SOURCE_SERIAL;
     snprintf(cfg.path, sizeof cfg.path, "%s", port);
     if (baud) cfg.baud = (uint32_t)cli_integer(argc, argv, "--baud", 0, 50, 16000000);
@@ -30,6 +33,9 @@ int live_session_open(const char *command, int argc, char **argv, const char *re
     if (rate_hz > 0) cfg.output_rate_hz = rate_hz;
     mocap_status s = mocap_session_open(&cfg, out);
     if (s != MOCAP_OK) return report_failure(s, "opening the receiver");
+    char described[512];
+    sensor_set_describe(&cfg, described, sizeof described);
+    printf("%u sensors (segment=node, ? optional): %s\n", (unsigned)cfg.sensor_count, described);
     s = mocap_session_start(*out);
     if (s != MOCAP_OK) {
         mocap_session_close(*out);
@@ -47,11 +53,10 @@ static void print_status_line(mocap_session *session, const mocap_frame *f)
     int cs = stats.connection_state >= 0 && stats.connection_state <= 3 ? stats.connection_state : 0;
     printf("\r%-12s frames %-7llu crc-fail %-5llu sensors ", states[cs],
            (unsigned long long)stats.frames_emitted, (unsigned long long)stats.crc_failures);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
-        char c = '.';
-        if (f && (f->sensors[s].flags & MOCAP_SENSOR_VALID)) c = (f->fresh_mask & (1u << s)) ? 'o' : 'h';
-        if (f && (f->sensors[s].flags & MOCAP_SENSOR_STALE)) c = 'S';
-        putchar(c);
+    static const char STATE_CHARS[] = "ohS."; /* by mocap_sensor_state */
+    for (uint32_t s = 0; f && s < f->sensor_count && s < MOCAP_MAX_SENSORS; ++s) {
+        const int32_t state = f->sensors[s].state;
+        putchar(state >= 0 && state <= MOCAP_SENSOR_ABSENT ? STATE_CHARS[state] : '?');
     }
     if (cs == MOCAP_CONNECTION_DISCONNECTED) printf("  %s", stats.last_error);
     printf("    ");
@@ -62,9 +67,18 @@ void live_session_show_status(mocap_session *session, double limit_s)
 {
     int64_t start = mocap_monotonic_ns();
     mocap_frame frame;
-    int have = 0;
+    int have = 0, named = 0;
     while (!mocapctl_interrupted && (double)(mocap_monotonic_ns() - start) * 1e-9 < limit_s) {
         if (mocap_session_poll_latest(session, &frame) == MOCAP_OK) have = 1;
+        if (have && !named) {
+            /* The legend of the status line's sensor column, once the first frame says the set. */
+            printf("\rsensors:");
+            for (uint32_t s = 0; s < frame.sensor_count && s < MOCAP_MAX_SENSORS; ++s)
+                printf(" %s(%u)", mocap_segment_name(frame.sensors[s].segment),
+                       (unsigned)frame.sensors[s].node_id);
+            printf("  (o fresh, h held, S silent, . absent)\n");
+            named = 1;
+        }
         print_status_line(session, have ? &frame : NULL);
         mocap_sleep_ms(100);
     }

@@ -5,14 +5,16 @@
 
 #include "mocap_imu.h"
 
-/* Opens and starts a session on --port (--baud), recording to `record_path` when not NULL, at
- * `rate_hz` (0: the default rate). Without --port, `command`'s usage. 0, or nonzero after
- * printing why (*out is then NULL or a session to close). */
+/* Opens and starts a session on --port (--baud) with the sensors of --sensors, recording to
+ * `record_path` when not NULL, at `rate_hz` (0: the default rate); with a model (may be NULL)
+ * the sensors it does not require are optional. Without --port, `command`'s usage. 0, or
+ * nonzero after printing why (*out is then NULL or a session to close). */
 int live_session_open(const char *command, int argc, char **argv, const char *record_path,
-                      float rate_hz, mocap_session **out);
+                      float rate_hz, const mocap_model_info *model, mocap_session **out);
 
-/* Refreshes a one-line status (connection, frames, CRC failures, each sensor's state) ten
- * times a second until Ctrl-C or `limit_s` seconds. */
+/* Names the sensors in the order of the status line, then refreshes a one-line status
+ * (connection, frames, CRC failures, each sensor's state) ten times a second until Ctrl-C or
+ * `limit_s` seconds. */
 void live_session_show_status(mocap_session *session, double limit_s);
 
 /* live_session_guided_step's result when the receiver delivered nothing. */

@@ -16,6 +16,7 @@
 #include "commands.h"
 #include "interrupt.h"
 #include "options.h"
+#include "sensor_set.h"
 
 typedef struct mocapctl_command {
     const char *name;    /* one word, or two for "bench decode" */
@@ -29,9 +30,9 @@ static const mocapctl_command COMMANDS[] = {
     {"synth", MOCAPCTL_SYNTH_OPTIONS, "write a generated capture of a known motion (and its truth)",
      "usage: mocapctl synth --out CAPTURE [--truth CSV] [--motion walk|arms|squat|turn|mixed]\n"
      "                      [--seconds S] [--world nwu|enu] [--noise none|realistic] [--seed N]\n"
-     "                      [--corrupt P] [--dropout P] [--trajectory FILE]\n"
-     "A 6-node 0x62 capture: a calibration prelude (heading 3 s, strap 2 s, T-pose 3 s), then the\n"
-     "motion.\n"
+     "                      [--corrupt P] [--dropout P] [--trajectory FILE] [--sensors LIST]\n"
+     "A 0x62 capture of the sensor set (default: six nodes): a calibration prelude (heading 3 s,\n"
+     "strap 2 s, T-pose 3 s), then the motion. The truth CSV has a column group per sensor.\n"
      "  --out CAPTURE        the capture to write\n"
      "  --truth CSV          the generator's truth: phase, bone orientations and accelerations\n"
      "  --motion NAME        a built-in motion (default mixed)\n"
@@ -41,14 +42,16 @@ static const mocapctl_command COMMANDS[] = {
      "  --noise none|realistic  sensor noise (default realistic)\n"
      "  --seed N             random seed (default 1)\n"
      "  --corrupt P          probability of a corrupted byte\n"
-     "  --dropout P          probability of a node missing from a gateway frame\n",
+     "  --dropout P          probability of a node missing from a gateway frame\n"
+     SENSOR_SET_HELP,
      cmd_synth},
     {"replay", MOCAPCTL_REPLAY_OPTIONS, "decode, calibrate and solve a capture; accuracy against a truth",
      "usage: mocapctl replay CAPTURE [--truth CSV] [--calibration FILE | --prelude H,S,T]\n"
      "                      [--save-calibration FILE] [--csv FRAMES.csv] [--realtime] [--rate HZ]\n"
+     "                      [--sensors LIST]\n"
      "       mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
      "                      [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
-     "                      [--metrics-json ACCURACY.json] [--smoothing HZ[,BETA]]\n"
+     "                      [--metrics-json ACCURACY.json] [--smoothing HZ[,BETA]] [--sensors LIST]\n"
      "The first form: decode -> filter -> calibrate, a summary per sensor and, with synth's truth,\n"
      "the bone orientation error. The second runs the pose model too (decode -> filter ->\n"
      "calibrate -> model -> drift correction): chosen by --model, --out, --json, --pose-csv or a\n"
@@ -67,30 +70,36 @@ static const mocapctl_command COMMANDS[] = {
      "  --pose-csv POSES.csv one CSV line per pose\n"
      "  --metrics-json ACCURACY.json  with a pose truth: the accuracy figures as JSON\n"
      "  --smoothing HZ[,BETA]  the output filter's cut-off at rest and its rise per rad/s\n"
-     "                       (default 1,6; 0 = the model's raw output)\n",
+     "                       (default 1,6; 0 = the model's raw output)\n"
+     SENSOR_SET_HELP
+     "                       with the model, the sensors it does not require are optional\n",
      cmd_replay},
     {"live", MOCAPCTL_LIVE_OPTIONS, "guided calibration on real sensors, then live status or poses",
      "usage: mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
-     "                    [--smoothing HZ[,BETA]]\n"
+     "                    [--smoothing HZ[,BETA]] [--sensors LIST]\n"
      "The heading and T-pose steps with a countdown, then a status line until Ctrl-C.\n"
      "  --port DEV           the receiver's serial port\n"
      "  --baud B             its baud rate\n"
      "  --record CAPTURE     keep every byte in a capture file\n"
      "  --seconds S          stop after S seconds\n"
      "  --model M, --pose    run the pose model (--pose: the shipped one) and show pose status\n"
-     "  --smoothing HZ[,BETA]  the output filter (default 1,6; 0 = off)\n",
+     "  --smoothing HZ[,BETA]  the output filter (default 1,6; 0 = off)\n"
+     SENSOR_SET_HELP
+     "                       with the model, the sensors it does not require are optional\n",
      cmd_live},
     {"record", MOCAPCTL_RECORD_OPTIONS, "record a live port's bytes into a capture",
-     "usage: mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S]\n"
+     "usage: mocapctl record --port DEV --out CAPTURE [--baud B] [--seconds S] [--sensors LIST]\n"
      "  --port DEV           the receiver's serial port\n"
      "  --out CAPTURE        the capture to write\n"
      "  --baud B             its baud rate\n"
-     "  --seconds S          stop after S seconds (default: at Ctrl-C)\n",
+     "  --seconds S          stop after S seconds (default: at Ctrl-C)\n"
+     SENSOR_SET_HELP,
      cmd_record},
     {"stream", MOCAPCTL_STREAM_OPTIONS, "solved poses to VMC receivers (OSC over UDP)",
      "usage: mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...]\n"
      "                      [--speed X | --fast] [--prelude H,S,T] | --port DEV [--baud B]) [--model M]\n"
      "                      [--rate HZ] [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]\n"
+     "                      [--sensors LIST]\n"
      "Character i (the i-th --replay, or the one --port) goes to the i-th --vmc.\n"
      "  --vmc HOST:PORT      a receiver (VSeeFace, EVMC4U, VMC4B listen on 39539)\n"
      "  --replay CAPTURE     a character from a capture\n"
@@ -103,7 +112,9 @@ static const mocapctl_command COMMANDS[] = {
      "  --rate HZ            at most this many bundles per second (default 60)\n"
      "  --seconds S          stop after S seconds\n"
      "  --allow-remote       allow destinations that are not this machine\n"
-     "  --smoothing HZ[,BETA]  the output filter (default 1,6; 0 = off)\n",
+     "  --smoothing HZ[,BETA]  the output filter (default 1,6; 0 = off)\n"
+     SENSOR_SET_HELP
+     "                       the sensors the model does not require are optional\n",
      cmd_stream},
     {"bench decode", MOCAPCTL_BENCH_DECODE_OPTIONS, "the decoder's throughput on one core",
      "usage: mocapctl bench decode [--seconds S]\n"
@@ -112,7 +123,7 @@ static const mocapctl_command COMMANDS[] = {
     {"bench", MOCAPCTL_BENCH_OPTIONS, "figures of the engine with the pose model",
      "usage: mocapctl bench pipeline|latency|scaling|tip|all [--model M] [--seconds S] [--threads N]\n"
      "                      [--tip-model F] [--max-characters N] [--latency-seconds S]\n"
-     "                      [--tip-seconds S]\n"
+     "                      [--tip-seconds S] [--sensors LIST]\n"
      "Figures, not tests: pipeline (frames/s of one character, peak RSS), latency (byte -> pose on\n"
      "a pseudo-terminal), scaling (characters through one solver), tip (a TIP-shaped network re-run\n"
      "over a window per frame against our model). The decoder's benchmark: bench decode --help.\n"
@@ -122,7 +133,10 @@ static const mocapctl_command COMMANDS[] = {
      "  --tip-seconds S      seconds per model in tip (default 3)\n"
      "  --threads N          ONNX Runtime threads in tip (default 1)\n"
      "  --max-characters N   scaling stops above N (default 32)\n"
-     "  --tip-model F        the TIP-shaped model (default: $MOCAP_TIP_MODEL or made by training)\n",
+     "  --tip-model F        the TIP-shaped model (default: $MOCAP_TIP_MODEL or made by training)\n"
+     SENSOR_SET_HELP
+     "                       of the generated capture and the sessions; the sensors the model\n"
+     "                       does not require are optional\n",
      cmd_bench},
     {"infer", MOCAPCTL_INFER_OPTIONS, "run a pose model on tensor files (for training's checks)",
      "usage: mocapctl infer --model M.onnx --input IN --output OUT [--frames T | --stream] [--batch B]\n"

@@ -7,19 +7,20 @@
 
 #define MOCAPCTL_SYNTH_OPTIONS                                                                    \
     "--out= --truth= --motion= --seconds= --world= --noise= --seed= --corrupt= --dropout= "      \
-    "--trajectory="
+    "--trajectory= --sensors="
 #define MOCAPCTL_REPLAY_OPTIONS                                                                   \
     "--truth= --calibration= --prelude= --save-calibration= --csv= --realtime --rate= "         \
-    "--model= --out= --bvh-order= --json= --pose-csv= --metrics-json= --smoothing="
-#define MOCAPCTL_LIVE_OPTIONS "--port= --baud= --record= --seconds= --model= --pose --smoothing="
-#define MOCAPCTL_RECORD_OPTIONS "--port= --out= --baud= --seconds="
+    "--model= --out= --bvh-order= --json= --pose-csv= --metrics-json= --smoothing= --sensors="
+#define MOCAPCTL_LIVE_OPTIONS                                                                     \
+    "--port= --baud= --record= --seconds= --model= --pose --smoothing= --sensors="
+#define MOCAPCTL_RECORD_OPTIONS "--port= --out= --baud= --seconds= --sensors="
 #define MOCAPCTL_STREAM_OPTIONS                                                                   \
     "--vmc= --replay= --realtime --fast --speed= --prelude= --port= --baud= --model= --rate= "         \
-    "--seconds= --allow-remote --smoothing="
+    "--seconds= --allow-remote --smoothing= --sensors="
 #define MOCAPCTL_BENCH_DECODE_OPTIONS "--seconds="
 #define MOCAPCTL_BENCH_OPTIONS                                                                    \
     "--model= --seconds= --latency-seconds= --tip-seconds= --threads= --max-characters= "       \
-    "--tip-model="
+    "--tip-model= --sensors="
 #define MOCAPCTL_INFER_OPTIONS                                                                    \
     "--model= --input= --output= --frames= --stream --batch= --threads= --opt= --provider= "    \
     "--repeat= --ort="

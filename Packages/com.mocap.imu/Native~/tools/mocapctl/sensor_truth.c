@@ -3,9 +3,53 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "mocap_math.h"
 #include "platform.h"
+
+#define TRUTH_MAX_VALUES (2 + MOCAP_MAX_SENSORS * 7)
+
+/* The header "t_session,phase,pelvis_qw,...,pelvis_az,left_wrist_qw,...": the segment of each
+ * group of seven columns. 0, or -1 after printing why. */
+static int read_header(const char *path, char *line, sensor_truth *table)
+{
+    int column = 0, groups = 0;
+    char *save = line;
+    for (char *p = line;; ++p) {
+        if (*p != ',' && *p != '\n' && *p != '\r' && *p != '\0') continue;
+        const char end = *p;
+        *p = '\0';
+        /* Columns 2, 9, 16 ... open a sensor's group: NAME_qw. */
+        if (column >= 2 && (column - 2) % 7 == 0) {
+            size_t len = strlen(save);
+            if (len < 4 || strcmp(save + len - 3, "_qw") != 0) {
+                fprintf(stderr, "mocapctl: truth file %s: column %d is '%s', not SEGMENT_qw\n", path,
+                        column + 1, save);
+                return -1;
+            }
+            save[len - 3] = '\0';
+            const int32_t seg = mocap_segment_find(save);
+            if (seg < 0 || groups == MOCAP_MAX_SENSORS || (table->segment_mask >> seg) & 1u) {
+                fprintf(stderr, "mocapctl: truth file %s: '%s' is not a segment of its own "
+                                "(unknown, or named twice)\n", path, save);
+                return -1;
+            }
+            table->segments[groups++] = seg;
+            table->segment_mask |= 1u << seg;
+        }
+        column++;
+        save = p + 1;
+        if (end != ',') break;
+    }
+    if (groups == 0 || column != 2 + 7 * groups) {
+        fprintf(stderr, "mocapctl: truth file %s: the header has %d columns, expected 2 + 7 per "
+                        "sensor\n", path, column);
+        return -1;
+    }
+    table->segment_count = groups;
+    return 0;
+}
 
 int sensor_truth_load(const char *path, sensor_truth *table)
 {
@@ -14,13 +58,32 @@ int sensor_truth_load(const char *path, sensor_truth *table)
         fprintf(stderr, "mocapctl: cannot open truth file %s\n", path);
         return -1;
     }
+    memset(table, 0, sizeof *table);
+    mocap_session_config defaults;
+    mocap_config_defaults(&defaults);
+    table->segment_count = (int)defaults.sensor_count;
+    for (int k = 0; k < table->segment_count; ++k) {
+        table->segments[k] = defaults.sensor_segments[k];
+        table->segment_mask |= 1u << defaults.sensor_segments[k];
+    }
     size_t cap = 4096;
     table->rows = (sensor_truth_row *)malloc(cap * sizeof(sensor_truth_row));
-    table->count = 0;
-    table->cursor = 0;
-    char line[4096];
+    char line[8192];
+    int header_seen = 0;
     while (table->rows && fgets(line, sizeof line, f)) {
-        if (line[0] == '#' || line[0] == '\n' || line[0] == 't') continue;
+        if (line[0] == '#' || line[0] == '\n') continue;
+        if (line[0] == 't') {
+            if (header_seen || table->count > 0) continue;
+            header_seen = 1;
+            table->segment_mask = 0;
+            if (read_header(path, line, table) != 0) {
+                fclose(f);
+                free(table->rows);
+                table->rows = NULL;
+                return -1;
+            }
+            continue;
+        }
         if (table->count == cap) {
             cap *= 2;
             sensor_truth_row *grown =
@@ -29,11 +92,12 @@ int sensor_truth_load(const char *path, sensor_truth *table)
             table->rows = grown;
         }
         sensor_truth_row *r = &table->rows[table->count];
-        /* Columns: t_session, phase, then qw qx qy qz ax ay az per segment; ',' or ' ' apart. */
-        double values[2 + MOCAP_SENSOR_COUNT * 7];
+        /* Columns: t_session, phase, then qw qx qy qz ax ay az per sensor; ',' or ' ' apart. */
+        const int expected = 2 + 7 * table->segment_count;
+        double values[TRUTH_MAX_VALUES];
         int n = 0;
         char *p = line, *end;
-        while (n < (int)(sizeof values / sizeof values[0])) {
+        while (n < expected) {
             while (*p == ',' || *p == ' ' || *p == '\t') ++p;
             values[n] = strtod(p, &end);
             if (end == p) break;
@@ -41,16 +105,18 @@ int sensor_truth_load(const char *path, sensor_truth *table)
             ++n;
         }
         /* The phase becomes an int: only a small whole number may (a damaged row is skipped). */
-        int ok = n == (int)(sizeof values / sizeof values[0]) && values[1] >= -1e6 && values[1] <= 1e6;
+        int ok = n == expected && values[1] >= -1e6 && values[1] <= 1e6;
         if (ok) {
+            memset(r, 0, sizeof *r);
             r->t = values[0];
             r->phase = (int)values[1];
-            for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
-                for (int k = 0; k < 4; ++k) r->q[s][k] = values[2 + s * 7 + k];
-                for (int k = 0; k < 3; ++k) r->a[s][k] = values[2 + s * 7 + 4 + k];
+            for (int k = 0; k < table->segment_count; ++k) {
+                const int seg = table->segments[k];
+                for (int c = 0; c < 4; ++c) r->q[seg][c] = values[2 + k * 7 + c];
+                for (int c = 0; c < 3; ++c) r->a[seg][c] = values[2 + k * 7 + 4 + c];
             }
+            table->count++;
         }
-        if (ok) table->count++;
     }
     fclose(f);
     if (!table->rows || table->count < 2) {
@@ -81,9 +147,10 @@ int sensor_truth_at(sensor_truth *table, double t, sensor_truth_row *out)
     if (u > 1) u = 1;
     out->t = t;
     out->phase = u < 0.5 ? a->phase : b->phase;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
-        quat_slerp(out->q[s], a->q[s], b->q[s], u);
-        for (int k = 0; k < 3; ++k) out->a[s][k] = a->a[s][k] + u * (b->a[s][k] - a->a[s][k]);
+    for (int k = 0; k < table->segment_count; ++k) {
+        const int seg = table->segments[k];
+        quat_slerp(out->q[seg], a->q[seg], b->q[seg], u);
+        for (int c = 0; c < 3; ++c) out->a[seg][c] = a->a[seg][c] + u * (b->a[seg][c] - a->a[seg][c]);
     }
     return 0;
 }
