@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
+from .sensors import DEFAULT_SENSORS, WRIST_SENSOR_PLACES, sensor_bones
 from .cli import NON_NEGATIVE_INT, POSITIVE_INT, number_type
 from .errors import CommandError, UsageError
 
@@ -91,23 +92,25 @@ class Clip:
     name: str
     fps: float
     offsets: np.ndarray            # (24,3)
-    imu_orientation: np.ndarray    # (T,6,3,3)
-    imu_acceleration: np.ndarray   # (T,6,3)
+    imu_orientation: np.ndarray    # (T,N,3,3)
+    imu_acceleration: np.ndarray   # (T,N,3)
     local_rot: np.ndarray          # (T,24,3,3) truth
     root_pos: np.ndarray           # (T,3) truth
     subject: int = 0               # 0: unknown (a BVH folder without NN_MM names)
+    sensors: tuple = DEFAULT_SENSORS   # segment names of the N sensors
 
 
-def synthesize_clip(motion: sk.Motion, rng, wrist: str = "hand", noise: str = "realistic") -> Clip:
+def synthesize_clip(motion: sk.Motion, rng, wrist: str = "hand", noise: str = "realistic",
+                    sensors=DEFAULT_SENSORS) -> Clip:
     """IMU inputs (synthesis.synthesize with eval_augmentation(noise)) + the truth. wrist: where
-    the wrist sensors are (skeleton.sensor_bones)."""
+    the wrist sensors are (sensors.sensor_bones); sensors: segment names, the model's order."""
     from .synthesis import synthesize
-    sample = synthesize(motion, rng=rng, augment=eval_augmentation(noise), wrist=wrist)
+    sample = synthesize(motion, rng=rng, augment=eval_augmentation(noise), wrist=wrist, sensors=sensors)
     return Clip(motion.name, float(sample.fps), np.asarray(sample.offsets, np.float64),
                 np.asarray(sample.imu_orientation, np.float32),
                 np.asarray(sample.imu_acceleration, np.float32),
                 np.asarray(sample.local_rot, np.float64), np.asarray(sample.root_pos, np.float64),
-                int(motion.subject))
+                int(motion.subject), sample.sensors)
 
 
 # ------------------------------------------------------------------------------ predictors
@@ -121,11 +124,11 @@ def predict_baseline(clip: Clip, wrist: str = "hand") -> Prediction:
     T = clip.imu_orientation.shape[0]
     ori = clip.imu_orientation.astype(np.float64)
     local = np.broadcast_to(np.eye(3), (T, 24, 3, 3)).copy()
-    pelvis = ori[:, 0]
+    pelvis = ori[:, list(clip.sensors).index("pelvis")] if "pelvis" in clip.sensors else np.eye(3)
     local[:, 0] = pelvis
     # Every ancestor of the sensor bones (other than the pelvis) is at rest, so the parent's
     # global rotation is the pelvis's.
-    for s, j in enumerate(sk.sensor_bones(wrist)):
+    for s, j in enumerate(sensor_bones(wrist, clip.sensors)):
         if j != 0:
             local[:, j] = np.swapaxes(pelvis, -1, -2) @ ori[:, s]
     return Prediction(local, np.zeros((T, 3)))
@@ -147,8 +150,9 @@ def _batches(clips, max_batch=16, max_values=60_000_000):
 
 def _padded(clips, group):
     T = max(clips[i].imu_orientation.shape[0] for i in group)
-    ori = np.tile(np.eye(3, dtype=np.float32), (len(group), T, 6, 1, 1))
-    acc = np.zeros((len(group), T, 6, 3), np.float32)
+    n = clips[group[0]].imu_orientation.shape[1]
+    ori = np.tile(np.eye(3, dtype=np.float32), (len(group), T, n, 1, 1))
+    acc = np.zeros((len(group), T, n, 3), np.float32)
     for b, i in enumerate(group):
         n = clips[i].imu_orientation.shape[0]
         ori[b, :n] = clips[i].imu_orientation
@@ -158,6 +162,7 @@ def _padded(clips, group):
 
 def predict_onnx(model_path, clips) -> list:
     from .ort import run_onnx
+    _require_sensors(clips, DEFAULT_SENSORS, f"{Path(model_path).name} (model contract 1)")
     out = [None] * len(clips)
     for group in _batches(clips):
         ori, acc = _padded(clips, group)
@@ -208,9 +213,18 @@ def load_torch_model(path, mirror: bool = False):
     return net.eval()
 
 
+def _require_sensors(clips, sensors, what: str) -> None:
+    """A UsageError unless every clip carries exactly these sensors, in this order."""
+    for c in clips:
+        if tuple(c.sensors) != tuple(sensors):
+            raise UsageError(f"{what} reads the sensors {','.join(sensors)}; clip {c.name} has "
+                             f"{','.join(c.sensors)}")
+
+
 def predict_torch(net, clips) -> list:
     from .train import setup_threads
     import torch
+    _require_sensors(clips, net.config.sensors, "the PyTorch network")
     setup_threads()  # OpenBLAS threads its own GEMMs; torch threads on top oversubscribe
     out = [None] * len(clips)
     with torch.no_grad():
@@ -605,17 +619,18 @@ def write_plots(out_dir, results, accs, clips):
 # ------------------------------------------------------------------------------ driver
 def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, latency=True,
              latency_frames=1800, source="", progress=True, mirror=True, wrist="hand",
-             noise="realistic") -> dict:
+             noise="realistic", sensors=DEFAULT_SENSORS) -> dict:
     """Evaluate every available method on the motions; writes the report; returns summaries.
     mirror: the PyTorch model is the mirror-averaged pair (model.MirrorEnsemble), as exported.
     wrist: where the synthesised wrist sensors are ("hand": on the back of the hands, where the
-    shipped model expects them; "forearm": wrist straps, skeleton.sensor_bones).
-    noise: "realistic" sensor errors (what the targets are for) or "none" (perfect sensors)."""
+    shipped model expects them; "forearm": wrist straps, sensors.sensor_bones).
+    noise: "realistic" sensor errors (what the targets are for) or "none" (perfect sensors).
+    sensors: the segment names synthesised, in the models' input order."""
     for m in motions:
         if m.num_frames == 0:
             raise UsageError(f"motion {m.name}: no frames to evaluate")
     rng = np.random.default_rng(seed)
-    clips = [synthesize_clip(m, rng, wrist, noise) for m in motions]
+    clips = [synthesize_clip(m, rng, wrist, noise, sensors) for m in motions]
     if not clips:
         raise UsageError("no motions to evaluate")
     preds = {"baseline": [predict_baseline(c, wrist) for c in clips]}
@@ -739,7 +754,7 @@ def add_arguments(p):
     p.add_argument("--max-clips", type=POSITIVE_INT, default=0, help="evaluate the first N clips")
     p.add_argument("--max-seconds", type=_POSITIVE_SECONDS, default=0.0, help="cut clips to this length")
     p.add_argument("--seed", type=NON_NEGATIVE_INT, default=0)  # numpy's generators take no negative seeds
-    p.add_argument("--wrist-sensor", dest="wrist_sensor", default=None, choices=sk.WRIST_SENSOR_PLACES,
+    p.add_argument("--wrist-sensor", dest="wrist_sensor", default=None, choices=WRIST_SENSOR_PLACES,
                    help="where the synthesised wrist sensors are: hand (back of the hands) or forearm "
                         "(wrist straps); default: where the checkpoint was trained to expect them "
                         "(hand without one)")
@@ -757,6 +772,14 @@ def expected_wrist_sensor(checkpoint) -> str:
     if not checkpoint:
         return "hand"
     return load_torch_model(checkpoint, mirror=False).config.wrist_anchor
+
+
+def expected_sensors(checkpoint) -> tuple:
+    """The segment names a checkpoint's network reads (ModelConfig.sensors); the default set
+    without a checkpoint (the ONNX models of contract 1)."""
+    if not checkpoint:
+        return DEFAULT_SENSORS
+    return tuple(load_torch_model(checkpoint, mirror=False).config.sensors)
 
 
 def main(args=None) -> int:
@@ -780,7 +803,7 @@ def main(args=None) -> int:
                  source=f"{'BVH folder ' if args.bvh else 'split '}{source}",
                  mirror=not getattr(args, "no_mirror", False),
                  wrist=getattr(args, "wrist_sensor", None) or expected_wrist_sensor(ckpt),
-                 noise=getattr(args, "noise", "realistic"))
+                 noise=getattr(args, "noise", "realistic"), sensors=expected_sensors(ckpt))
     def shown(v, digits):   # "-" where clips are too short to measure (as in the report)
         return f"{v:.{digits}f}" if v == v else "-"
     for name, s in r["results"].items():

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from . import sensors as se
 from . import skeleton as sk
 from .errors import CommandError, UsageError
 from .model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters, non_finite_tensors
@@ -55,10 +56,11 @@ def _fmt(x: float) -> str:
 
 
 def contract_metadata(net: PoseNet, precision: str, model_name: str) -> dict:
+    require_contract_sensors(net, "the network")
     return {
         "mocap.contract_version": CONTRACT_VERSION,
         "mocap.frame_rate": str(sk.MODEL_FPS),
-        "mocap.sensor_order": ",".join(sk.SENSOR_NAMES),
+        "mocap.sensor_order": ",".join(net.config.sensors),
         "mocap.joint_names": ",".join(sk.JOINT_NAMES),
         "mocap.joint_parents": ",".join(str(p) for p in sk.PARENTS),
         "mocap.rest_offsets": ",".join(_fmt(v) for v in np.asarray(sk.DEFAULT_OFFSETS).reshape(-1)),
@@ -81,9 +83,9 @@ def export_fp32(net: PoseNet, path, model_name: str) -> None:
     import onnx
     net = net.cpu().eval()
     wrapper = ExportWrapper(net).eval()
-    b, t = 1, 4
-    ori = torch.eye(3).expand(b, t, 6, 3, 3).contiguous()
-    acc = torch.zeros(b, t, 6, 3)
+    b, t, n = 1, 4, len(net.config.sensors)
+    ori = torch.eye(3).expand(b, t, n, 3, 3).contiguous()
+    acc = torch.zeros(b, t, n, 3)
     h, c = net.zero_state(b)
     dyn = {"imu_orientation": {0: "B", 1: "T"}, "imu_acceleration": {0: "B", 1: "T"},
            "state_in_h": {1: "B"}, "state_in_c": {1: "B"},
@@ -108,8 +110,8 @@ def export_fp32(net: PoseNet, path, model_name: str) -> None:
 def _fix_state_shapes(model, net: PoseNet) -> None:
     """Write the contract's shapes on every input and output (symbolic B and T, static rest;
     the exporter leaves some static dims symbolic, e.g. the 24 of a Concat)."""
-    L, H = net.state_layers, net.state_size
-    shapes = {"imu_orientation": ["B", "T", 6, 3, 3], "imu_acceleration": ["B", "T", 6, 3],
+    L, H, n = net.state_layers, net.state_size, len(net.config.sensors)
+    shapes = {"imu_orientation": ["B", "T", n, 3, 3], "imu_acceleration": ["B", "T", n, 3],
               "state_in_h": [L, "B", H], "state_in_c": [L, "B", H],
               "joint_rotations": ["B", "T", 24, 3, 3], "root_velocity": ["B", "T", 3],
               "foot_contact": ["B", "T", 2], "state_out_h": [L, "B", H], "state_out_c": [L, "B", H]}
@@ -168,13 +170,15 @@ def untrained_model(seed: int = 0, config: ModelConfig | None = None) -> PoseNet
 
 
 # ------------------------------------------------------------------------------ numeric check
-def fixture_inputs(seconds: float = 3.0, seed: int = 0, kinds=("walk", "mixed")) -> tuple:
-    """Procedural motions -> synthesised (B,T,6,3,3), (B,T,6,3) float32 (no augmentation)."""
+def fixture_inputs(seconds: float = 3.0, seed: int = 0, kinds=("walk", "mixed"),
+                   sensors=se.DEFAULT_SENSORS) -> tuple:
+    """Procedural motions -> synthesised (B,T,N,3,3), (B,T,N,3) float32 (no augmentation) of
+    these sensors (segment names)."""
     from . import procedural
     from .synthesis import synthesize
     oris, accs = [], []
     for i, k in enumerate(kinds):
-        s = synthesize(procedural.make_motion(k, seconds=seconds, seed=seed + i))
+        s = synthesize(procedural.make_motion(k, seconds=seconds, seed=seed + i), sensors=sensors)
         oris.append(s.imu_orientation)
         accs.append(s.imu_acceleration)
     return np.stack(oris).astype(np.float32), np.stack(accs).astype(np.float32)
@@ -192,7 +196,7 @@ def check_against_torch(net: PoseNet, paths: dict, ori=None, acc=None, stream_fr
     difference between streaming (T=1 per call) and one whole-clip call on the fp32 file."""
     from . import ort
     if ori is None:
-        ori, acc = fixture_inputs()
+        ori, acc = fixture_inputs(sensors=net.config.sensors)
     ref = torch_outputs(net, ori, acc)
     report = {}
     for tag, p in paths.items():
@@ -226,6 +230,17 @@ def require_exportable(net, what: str) -> None:
         raise UsageError(f"{what} is a {net.config.core} network (train --size tip, for the architecture "
                          f"comparison); the engine's model contract carries LSTM state only, so it "
                          f"cannot be exported; nothing written")
+    require_contract_sensors(net, what)
+
+
+def require_contract_sensors(net, what: str) -> None:
+    """A UsageError for a sensor list other than contract version 1's (the default set in table
+    order): the exporter writes contract 1 only, without the imu_mask input of contract 2."""
+    if tuple(net.config.sensors) != se.DEFAULT_SENSORS:
+        raise UsageError(f"{what} reads the sensors {','.join(net.config.sensors)}; this exporter writes "
+                         f"model contract {CONTRACT_VERSION}, whose sensors are "
+                         f"{','.join(se.DEFAULT_SENSORS)} (contract 2, with imu_mask, is not generated "
+                         f"yet); nothing written")
 
 
 def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True) -> dict:

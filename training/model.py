@@ -1,10 +1,11 @@
 """Streaming pose network (owner: model).
 
-PoseNet maps the six calibrated IMU signals of the contract (global bone orientations and
-bone accelerations, model frame, physical units) to joint rotations, root velocity and foot
-contact probabilities. It is causal and its only memory is the LSTM state (h, c) of shape
-[STATE_LAYERS, B, STATE_SIZE], so one call with T frames equals T calls with T = 1 and the
-per-frame cost does not depend on the session length.
+PoseNet maps the calibrated IMU signals of its N sensors (ModelConfig.sensors, segment names of
+the engine's table, sensors.py; default the six of contract 1: global bone orientations and bone
+accelerations, model frame, physical units) to joint rotations, root velocity and foot contact
+probabilities. One sensor must be the pelvis. It is causal and its only memory is the LSTM
+state (h, c) of shape [STATE_LAYERS, B, STATE_SIZE], so one call with T frames equals T calls
+with T = 1 and the per-frame cost does not depend on the session length.
 
 Every normalisation happens inside the module (and so inside the exported ONNX graph):
 
@@ -14,9 +15,9 @@ Every normalisation happens inside the module (and so inside the exported ONNX g
   it defined when the pelvis forward axis is vertical (lying on the back or front). It rotates
   exactly with any yaw of the whole body. Ry(heading) is built from the normalised (x, z) of h,
   no atan2 (ONNX has none);
-* features per frame (132 values): the six orientations and accelerations in the heading frame
-  (Ry^T R_i, Ry^T a_i) and the five non-pelvis sensors relative to the pelvis
-  (R_0^T R_i, R_0^T (a_i - a_0)); accelerations are divided by ACC_SCALE;
+* features per frame (24 N - 12 values, 132 for six sensors): the N orientations and
+  accelerations in the heading frame (Ry^T R_i, Ry^T a_i) and the N - 1 non-pelvis sensors
+  relative to the pelvis (R_p^T R_i, R_p^T (a_i - a_p)); accelerations are divided by ACC_SCALE;
 * outputs are mapped back: joint 0 (pelvis) is predicted in the heading frame as a residual on
   the measured heading-free pelvis orientation and rotated back by Ry; joints 1..23 are residuals
   on the identity (rest pose); root velocity is predicted in the heading frame and rotated back.
@@ -32,13 +33,19 @@ from dataclasses import dataclass, asdict, replace
 import torch
 import torch.nn as nn
 
-from .skeleton import MIRROR_JOINTS, PARENTS, SENSOR_BONES, SENSOR_JOINTS
+from . import sensors as se
+from .skeleton import MIRROR_JOINTS, PARENTS
 
-NUM_SENSORS = 6
 NUM_JOINTS = 24
 ACC_SCALE = 30.0            # m/s^2 -> network units (TransPose uses the same divisor)
-FEATURE_SIZE = 6 * 9 + 6 * 3 + 5 * 9 + 5 * 3   # 132
 OUTPUT_SIZE = NUM_JOINTS * 6 + 3 + 2           # 149
+PELVIS = "pelvis"
+
+
+def feature_size(num_sensors: int) -> int:
+    """Per-frame features of N sensors: N orientations and accelerations in the heading frame,
+    N - 1 of each relative to the pelvis."""
+    return num_sensors * (9 + 3) + (num_sensors - 1) * (9 + 3)
 
 
 def _ancestors(joints):
@@ -51,10 +58,12 @@ def _ancestors(joints):
     return out
 
 
-# The joint whose local rotation is anchored on each sensor (contract order), by where the wrist
-# sensors are (ModelConfig.wrist_anchor): on the back of the hand they measure the hand (the wrist
-# joint's bone); as wrist straps, the forearm (the elbow joint's bone, skeleton.SENSOR_BONES).
-ANCHOR_JOINTS = {"forearm": list(SENSOR_BONES), "hand": list(SENSOR_JOINTS)}
+def _index(x: torch.Tensor, dim: int, idx: list) -> torch.Tensor:
+    """x's entries idx along dim: a slice where idx is a run (the graph keeps a Slice), else a
+    gather."""
+    if idx == list(range(idx[0], idx[0] + len(idx))):
+        return x.narrow(dim, idx[0], len(idx))
+    return x.index_select(dim, torch.tensor(idx, device=x.device))
 
 
 @dataclass
@@ -66,9 +75,12 @@ class ModelConfig:
     dropout: float = 0.0      # training only: after the frame MLP, between and after LSTM layers
     anchored: bool = False    # sensor bones' local rotations are residuals on the measured ones
     # The bone the wrist sensors report, as trained (train --wrist-sensor): "hand" (a sensor on the
-    # back of the hand: the shipped model) or "forearm" (a wrist strap, skeleton.SENSOR_BONES).
+    # back of the hand: the shipped model) or "forearm" (a wrist strap, sensors.sensor_bones).
     # Anchored networks anchor it.
     wrist_anchor: str = "hand"
+    # The input sensors, segment names in input order (sensors.py). Checkpoints written before
+    # it existed have the default six.
+    sensors: tuple = se.DEFAULT_SENSORS
     # The recurrent core between the frame MLP and the heads: "lstm" (the shipped network: an
     # LSTM of `layers` x `hidden`) or "transformer", the class of the seed system's TIP for the
     # architecture comparison (`train --size tip`): `blocks` causal self-attention blocks of
@@ -90,8 +102,9 @@ class ModelConfig:
         known = cls.__dataclass_fields__
         d = {k: v for k, v in d.items() if k in known}
         d.setdefault("wrist_anchor", "hand")
-        if d["wrist_anchor"] not in ANCHOR_JOINTS:
-            raise ValueError(f"wrist_anchor {d['wrist_anchor']!r}: expected one of {sorted(ANCHOR_JOINTS)}")
+        if d["wrist_anchor"] not in se.WRIST_SENSOR_PLACES:
+            raise ValueError(f"wrist_anchor {d['wrist_anchor']!r}: expected one of {list(se.WRIST_SENSOR_PLACES)}")
+        d["sensors"] = check_sensors(d.get("sensors", se.DEFAULT_SENSORS))
         # A damaged or hand-edited config would otherwise fail deep inside torch (e.g. nn.LSTM
         # with hidden -5), far from the file that holds it.
         if d.get("core", "lstm") not in CORES:
@@ -109,6 +122,15 @@ class ModelConfig:
 
 
 CORES = ("lstm", "transformer")
+
+
+def check_sensors(names) -> tuple:
+    """A network's sensor list (sensors.sensor_list) that holds the pelvis, whose heading every
+    feature is expressed in; ValueError otherwise."""
+    names = se.sensor_list(names)
+    if PELVIS not in names:
+        raise ValueError(f"sensors {', '.join(names)}: the network needs a {PELVIS} sensor (its heading frame)")
+    return names
 
 
 def check_attention_dims(embed: int, heads: int, window: int) -> None:
@@ -279,8 +301,11 @@ class PoseNet(nn.Module):
         super().__init__()
         self.config = replace(config) if config else ModelConfig()   # own copy: set_dropout edits it
         c = self.config
+        c.sensors = check_sensors(c.sensors)
+        self.pelvis = c.sensors.index(PELVIS)
+        self.others = [i for i in range(len(c.sensors)) if i != self.pelvis]
         self.embed = nn.Sequential(
-            nn.Linear(FEATURE_SIZE, c.embed), nn.ReLU(),
+            nn.Linear(feature_size(len(c.sensors)), c.embed), nn.ReLU(),
             nn.Linear(c.embed, c.embed), nn.ReLU())
         if c.core == "transformer":
             self.core = WindowedTransformerCore(c)
@@ -319,7 +344,9 @@ class PoseNet(nn.Module):
             self.config.wrist_anchor = "forearm"
             return
         self.config.wrist_anchor = "forearm"
-        self._zero_output_rows([18, 19, 20, 21])
+        hand = se.sensor_bones("hand", self.config.sensors)
+        forearm = se.sensor_bones("forearm", self.config.sensors)
+        self._zero_output_rows(sorted({j for a, b in zip(hand, forearm) if a != b for j in (a, b)}))
 
     def _zero_output_rows(self, joints) -> None:
         last = self.head[-1]
@@ -330,7 +357,9 @@ class PoseNet(nn.Module):
 
     @property
     def anchor_joints(self) -> list:
-        return ANCHOR_JOINTS[self.config.wrist_anchor]
+        """The joint whose local rotation is anchored on each sensor (input order): its bone
+        (sensors.sensor_bones), by where the wrist sensors are (config.wrist_anchor)."""
+        return se.sensor_bones(self.config.wrist_anchor, self.config.sensors)
 
     @property
     def state_layers(self) -> int:
@@ -348,16 +377,17 @@ class PoseNet(nn.Module):
         return z, z.clone()
 
     def features(self, ori: torch.Tensor, acc: torch.Tensor) -> tuple:
-        """ori (B,T,6,3,3), acc (B,T,6,3) -> (features (B,T,132), Ry (B,T,3,3), the six
-        orientations in the heading frame (B,T,6,3,3); sensor 0 is the pelvis)."""
-        r0 = ori[:, :, 0]
+        """ori (B,T,N,3,3), acc (B,T,N,3) -> (features (B,T,24N-12), Ry (B,T,3,3), the N
+        orientations in the heading frame (B,T,N,3,3))."""
+        p = self.pelvis
+        r0 = ori[:, :, p]
         ry = heading_rotation(r0)
         ryt = ry.transpose(-1, -2).unsqueeze(2)
-        rg = ryt @ ori                                             # (B,T,6,3,3)
-        ag = (ryt @ acc.unsqueeze(-1)).squeeze(-1)                 # (B,T,6,3)
+        rg = ryt @ ori                                             # (B,T,N,3,3)
+        ag = (ryt @ acc.unsqueeze(-1)).squeeze(-1)                 # (B,T,N,3)
         r0t = r0.transpose(-1, -2).unsqueeze(2)
-        rrel = r0t @ ori[:, :, 1:]                                 # (B,T,5,3,3)
-        arel = (r0t @ (acc[:, :, 1:] - acc[:, :, 0:1]).unsqueeze(-1)).squeeze(-1)
+        rrel = r0t @ _index(ori, 2, self.others)                   # (B,T,N-1,3,3)
+        arel = (r0t @ (_index(acc, 2, self.others) - acc[:, :, p:p + 1]).unsqueeze(-1)).squeeze(-1)
         feat = torch.cat([rg.flatten(2), ag.flatten(2) / ACC_SCALE,
                           rrel.flatten(2), arel.flatten(2) / ACC_SCALE], dim=-1)
         return feat, ry, rg
@@ -400,7 +430,7 @@ class PoseNet(nn.Module):
             y = torch.nn.functional.dropout(y, p, True)
         out = self.head(y)
         rot6 = out[..., :NUM_JOINTS * 6].reshape(b, t, NUM_JOINTS, 6)
-        base0 = matrix_to_rot6d(rg[:, :, 0]).unsqueeze(2)               # (B,T,1,6)
+        base0 = matrix_to_rot6d(rg[:, :, self.pelvis]).unsqueeze(2)     # (B,T,1,6)
         base = torch.cat([base0, self.identity6d.expand(b, t, NUM_JOINTS - 1, 6)], dim=2)
         rot = rot6d_to_matrix(rot6 + base)
         if self.config.anchored:
@@ -418,10 +448,6 @@ class PoseNet(nn.Module):
         return rot, vel, torch.sigmoid(logits), st
 
 
-# Left/right counterparts in the contract's sensor order (pelvis, wrists, shins, head).
-MIRROR_SENSORS = [0, 2, 1, 4, 3, 5]
-
-
 class MirrorEnsemble(nn.Module):
     """The shipped inference: a PoseNet run twice per frame, on the inputs and on their mirror
     image (reflected in the sagittal plane, left and right sensors swapped), the second answer
@@ -437,6 +463,8 @@ class MirrorEnsemble(nn.Module):
     def __init__(self, net: PoseNet):
         super().__init__()
         self.net = net
+        # each sensor's left/right counterpart in the network's own list
+        self.mirror_sensors = se.mirror_indices(net.config.sensors)
         self.register_buffer("reflect", torch.diag(torch.tensor([-1.0, 1.0, 1.0])), persistent=False)
 
     @property
@@ -463,8 +491,9 @@ class MirrorEnsemble(nn.Module):
     def forward(self, imu_orientation, imu_acceleration, state=None):
         m = self.reflect
         b = imu_orientation.shape[0]
-        ori = torch.cat([imu_orientation, m @ imu_orientation[:, :, MIRROR_SENSORS] @ m], dim=0)
-        acc = torch.cat([imu_acceleration, imu_acceleration[:, :, MIRROR_SENSORS] @ m], dim=0)
+        mirror = self.mirror_sensors
+        ori = torch.cat([imu_orientation, m @ imu_orientation[:, :, mirror] @ m], dim=0)
+        acc = torch.cat([imu_acceleration, imu_acceleration[:, :, mirror] @ m], dim=0)
         if state is None:
             state = self.zero_state(b, imu_orientation.device)
         inner = tuple(torch.cat([s[..., :half], s[..., half:]], dim=1)

@@ -7,7 +7,7 @@ tests off) unless the environment variable MOCAP_MOCAPCTL names one. Arrays trav
 "tensor bundle" files (format in Packages/com.mocap.imu/Native~/tools/mocapctl/cmd_infer.c and
 training/README.md).
 
-    run_onnx(model_path, imu_orientation (B,T,6,3,3), imu_acceleration (B,T,6,3), state=None)
+    run_onnx(model_path, imu_orientation (B,T,N,3,3), imu_acceleration (B,T,N,3), state=None)
         -> dict(joint_rotations (B,T,24,3,3), root_velocity (B,T,3), foot_contact (B,T,2),
                 state_out_h (L,B,H), state_out_c (L,B,H))
     onnx_runtime_available() -> bool
@@ -24,6 +24,8 @@ import threading
 from pathlib import Path
 
 import numpy as np
+
+from .sensors import MAX_SENSORS
 
 REPO = Path(__file__).resolve().parent.parent
 NATIVE = REPO / "Packages" / "com.mocap.imu" / "Native~"
@@ -172,7 +174,8 @@ def run_onnx(model_path, imu_orientation, imu_acceleration, state=None, *, frame
              stream=False, threads=None, timing=False):
     """Run an ONNX pose model on the real ONNX Runtime (through `mocapctl infer`).
 
-    imu_orientation (B,T,6,3,3), imu_acceleration (B,T,6,3); state: None (zeros), a tuple
+    imu_orientation (B,T,N,3,3), imu_acceleration (B,T,N,3) in the model's sensor order (N = 6
+    for contract 1; mocapctl infer checks N against the model); state: None (zeros), a tuple
     (h, c) or a dict with state_in_h/state_in_c (or a previous result's state_out_h/_c), each
     (L,B,H). The whole clip runs in one call unless frames_per_call (or stream=True: 1 frame per
     call, as the engine runs). Returns a dict of float32 arrays: joint_rotations (B,T,24,3,3),
@@ -180,10 +183,10 @@ def run_onnx(model_path, imu_orientation, imu_acceleration, state=None, *, frame
     timing=True also "timing": {calls, first_us, p50_us, p99_us, mean_us} per call."""
     ori = np.asarray(imu_orientation, dtype=np.float32)
     acc = np.asarray(imu_acceleration, dtype=np.float32)
-    if ori.ndim != 5 or ori.shape[2:] != (6, 3, 3):
-        raise ValueError(f"imu_orientation must be (B,T,6,3,3), got {ori.shape}")
-    if acc.shape != ori.shape[:2] + (6, 3):
-        raise ValueError(f"imu_acceleration must be {ori.shape[:2] + (6, 3)}, got {acc.shape}")
+    if ori.ndim != 5 or ori.shape[3:] != (3, 3) or not 1 <= ori.shape[2] <= MAX_SENSORS:
+        raise ValueError(f"imu_orientation must be (B,T,N,3,3) with N 1..{MAX_SENSORS}, got {ori.shape}")
+    if acc.shape != ori.shape[:3] + (3,):
+        raise ValueError(f"imu_acceleration must be {ori.shape[:3] + (3,)}, got {acc.shape}")
     model_path = Path(model_path)
     if not model_path.is_file():
         raise FileNotFoundError(f"model {model_path} does not exist")

@@ -219,7 +219,7 @@ def sensor_gain(motions, checkpoint, out_dir, seed=0, source="", noise="realisti
     net = ev.load_torch_model(checkpoint, mirror=True)
     wrist = ev.expected_wrist_sensor(checkpoint)
     rng = np.random.default_rng(seed)
-    clips = [ev.synthesize_clip(m, rng, wrist, noise) for m in motions]
+    clips = [ev.synthesize_clip(m, rng, wrist, noise, net.config.sensors) for m in motions]
     preds = ev.predict_torch(net, clips)
     results = measure(clips, preds, candidates, ev.eval_augmentation(noise), np.random.default_rng(seed + 1))
     meta = {"clips": len(clips), "source": source, "seed": seed, "candidates": dict(candidates),

@@ -20,18 +20,6 @@ JOINT_NAMES = [
 PARENTS = [-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21]
 NUM_JOINTS = 24
 
-# Where each sensor sits (its position is a fixed offset from this joint, synthesis.py), and the
-# bone it turns with when the wrist sensors are on the back of the hands (the shipped model's
-# placement, docs/model-contract.md) ...
-SENSOR_JOINTS = [0, 20, 21, 4, 5, 15]
-# ... and the bones when they are wrist straps instead. A strap sits on the distal forearm, just
-# above the wrist joint: it turns with the forearm, including the forearm's twist (pronation and
-# supination, which the CMU skeleton and ours keep in the wrist joint), but not with the hand's
-# flexion or sideways bend. So it reports the forearm (the elbow joint's bone) turned by the twist
-# part of the wrist joint: `sensor_bone_orientations(..., wrist="forearm")`.
-SENSOR_BONES = [0, 18, 19, 4, 5, 15]
-WRIST_TWIST_JOINTS = {1: 20, 2: 21}     # sensor index -> joint whose twist the strap follows
-SENSOR_NAMES = ["pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head"]
 FOOT_JOINTS = [10, 11]
 ANKLE_JOINTS = [7, 8]
 
@@ -246,30 +234,6 @@ def twist_about_x(rot):
     w, x = q[..., 0], q[..., 1]
     angle = 2.0 * np.arctan2(x, w)
     return rot_axis("x", angle)
-
-
-WRIST_SENSOR_PLACES = ("hand", "forearm")
-
-
-def sensor_bones(wrist: str = "hand") -> list:
-    """The bone each sensor turns with: with the wrist sensors on the back of the hands ("hand",
-    the shipped model's placement) SENSOR_JOINTS; as wrist straps ("forearm") SENSOR_BONES."""
-    if wrist not in WRIST_SENSOR_PLACES:
-        raise ValueError(f"wrist sensor place {wrist!r}: expected one of {WRIST_SENSOR_PLACES}")
-    return list(SENSOR_BONES) if wrist == "forearm" else list(SENSOR_JOINTS)
-
-
-def sensor_bone_orientations(global_rot, local_rot, wrist: str = "hand") -> np.ndarray:
-    """What each sensor's bone orientation is, (T,24,3,3) global and local rotations -> (T,6,3,3)
-    in the contract's sensor order: the global rotation of its bone (`sensor_bones`); for wrist
-    straps, the forearm's times the twist of the wrist joint (see SENSOR_BONES)."""
-    g = np.asarray(global_rot, dtype=np.float64)
-    out = g[:, sensor_bones(wrist)].copy()
-    if wrist == "forearm":
-        local = np.asarray(local_rot, dtype=np.float64)
-        for s, j in WRIST_TWIST_JOINTS.items():
-            out[:, s] = out[:, s] @ twist_about_x(local[:, j])
-    return out
 
 
 def quat_from_rot(rot):

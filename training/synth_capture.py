@@ -52,8 +52,12 @@ from . import skeleton as sk
 from .cli import number_type
 from .errors import CommandError, UsageError
 from .files import same_file
+from .sensors import DEFAULT_SENSORS
 
 TRAJECTORY_RATE = 100.0
+# The sensors of a trajectory file (Native~/docs/synth-trajectory.md): the engine's default set,
+# in the table's order, as mocapctl synth reads them.
+TRAJECTORY_SENSORS = DEFAULT_SENSORS
 MAX_LEAD_IN_S = 60.0   # a blend from the T-pose into the clip; minutes of it would be a mistake
 
 
@@ -80,37 +84,19 @@ def with_lead_in(motion: sk.Motion, seconds: float = 1.0) -> sk.Motion:
                      np.concatenate([roots, motion.root_pos]).astype(np.float32), motion.offsets)
 
 
-def sensor_signals(motion: sk.Motion):
-    """(orientation (T,6,3,3) bone -> model, acceleration (T,6,3) m/s^2 model frame, gravity
-    excluded) at the motion's frame rate, from synthesis.synthesize without augmentation."""
-    try:
-        from .synthesis import synthesize
-    except ImportError:  # synthesis.py not present: the plain kinematic signals below
-        return kinematic_signals(motion)
-    sample = synthesize(motion, rng=None, augment=None)
+def sensor_signals(motion: sk.Motion, sensors=TRAJECTORY_SENSORS):
+    """(orientation (T,N,3,3) bone -> model, acceleration (T,N,3) m/s^2 model frame, gravity
+    excluded) of the sensors (segment names) at the motion's frame rate, from
+    synthesis.synthesize without augmentation."""
+    from .synthesis import synthesize
+    sample = synthesize(motion, rng=None, augment=None, sensors=sensors)
     return (np.asarray(sample.imu_orientation, np.float64),
             np.asarray(sample.imu_acceleration, np.float64))
 
 
-def kinematic_signals(motion: sk.Motion):
-    """Fallback without synthesis.py: orientation = global rotation of each sensor's bone;
-    acceleration = central second difference of a point on it (pelvis root, wrist joints, shin
-    midpoints, head joint), ends repeated."""
-    g, p = sk.forward_kinematics(motion.local_rot.astype(np.float64),
-                                 motion.root_pos.astype(np.float64), motion.offsets)
-    ori = sk.sensor_bone_orientations(g, motion.local_rot)
-    pts = p[:, sk.SENSOR_JOINTS].copy()
-    pts[:, 3] = 0.5 * (p[:, 4] + p[:, 7])
-    pts[:, 4] = 0.5 * (p[:, 5] + p[:, 8])
-    acc = np.zeros_like(pts)
-    if len(pts) >= 3:
-        acc[1:-1] = (pts[2:] - 2 * pts[1:-1] + pts[:-2]) * motion.fps ** 2
-        acc[0], acc[-1] = acc[1], acc[-2]
-    return ori, acc
-
-
 def resample_signals(orientation, acceleration, fps, rate=TRAJECTORY_RATE):
-    """Slerp orientations / lerp accelerations from fps to rate. Returns t, quats (N,6,4), acc."""
+    """Slerp orientations / lerp accelerations (T,N,...) from fps to rate. Returns t, quats
+    (M,N,4), acc (M,N,3)."""
     T = orientation.shape[0]
     duration = (T - 1) / fps
     t = np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
@@ -118,20 +104,23 @@ def resample_signals(orientation, acceleration, fps, rate=TRAJECTORY_RATE):
     i0 = np.minimum(np.floor(x).astype(int), T - 1)
     i1 = np.minimum(i0 + 1, T - 1)
     w = (x - i0)
-    q = sk.quat_from_rot(orientation)                              # (T,6,4)
-    quats = sk.slerp_quat(q[i0], q[i1], np.broadcast_to(w[:, None], (len(t), 6)))
+    q = sk.quat_from_rot(orientation)                              # (T,N,4)
+    quats = sk.slerp_quat(q[i0], q[i1], np.broadcast_to(w[:, None], (len(t), q.shape[1])))
     acc = acceleration[i0] + w[:, None, None] * (acceleration[i1] - acceleration[i0])
     return t, quats, acc
 
 
-def write_trajectory(path, t, quats, acc, comment=""):
-    """The text format of Native~/docs/synth-trajectory.md (43 numbers per line)."""
+def write_trajectory(path, t, quats, acc, comment="", sensors=TRAJECTORY_SENSORS):
+    """The text format of Native~/docs/synth-trajectory.md (1 + 7 N numbers per line), quats
+    (M,N,4) and acc (M,N,3) of the sensors (segment names) in their order."""
+    if quats.shape[1] != len(sensors) or acc.shape[1] != len(sensors):
+        raise ValueError(f"{len(sensors)} sensors, but quats {quats.shape} and acc {acc.shape}")
     with open(path, "w") as f:
         f.write("# synth-capture trajectory" + (f": {comment}" if comment else "") + "\n")
-        f.write("# t  then per segment (" + ", ".join(sk.SENSOR_NAMES) + "): qw qx qy qz ax ay az\n")
+        f.write("# t  then per segment (" + ", ".join(sensors) + "): qw qx qy qz ax ay az\n")
         for k in range(len(t)):
             vals = [f"{t[k]:.5f}"]
-            for s in range(6):
+            for s in range(len(sensors)):
                 vals += [f"{v:.7f}" for v in quats[k, s]] + [f"{v:.5f}" for v in acc[k, s]]
             f.write(" ".join(vals) + "\n")
 

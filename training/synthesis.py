@@ -1,9 +1,10 @@
 """Virtual IMUs on a Motion: the inputs the calibrated engine feeds the model, and the targets
 (owner: model).
 
-Sensors ride on the six contract segments at fixed offsets from a joint (skeleton.SENSOR_JOINTS)
-in the frame of the bone they turn with (skeleton.SENSOR_BONES; bone frames are parallel to the
-model frame in the T-pose: X left, Y up, Z forward):
+Sensors ride on segments of the engine's table (sensors.py; default: the six of the default set,
+in the table's order) at fixed offsets from the segment's joint, in the frame of the bone they
+turn with (sensors.sensor_bones; bone frames are parallel to the model frame in the T-pose: X
+left, Y up, Z forward):
 
 | sensor | bone it turns with | offset (default proportions, scaled with the body) |
 |---|---|---|
@@ -11,12 +12,13 @@ model frame in the T-pose: X left, Y up, Z forward):
 | left / right wrist | 20 / 21 hand (`wrist="forearm"`: the forearm 18 / 19 with its twist) | (-/+0.03, +0.035, 0) m from the wrist joint (20 / 21): the back of the wrist (the top in a palms-down T-pose), 3 cm up the forearm |
 | left / right shin | 4 / 5 knee | 40 % of the knee -> ankle bone, plus 5 cm forward: the front of the shin |
 | head | 15 head (skull base) | (0, +0.13, 0) m: above the ears (headband) |
+| chest | 9 spine3 | (0, +0.02, +0.10) m: on the sternum (a chest strap) |
 
 * Orientation = global rotation of the sensor's bone (what the engine's T-pose calibration
   reports). The wrist sensors turn with the hand (a sensor on the back of the hand: the shipped
   model's placement) or, with `wrist="forearm"`, as a wrist strap does: with the forearm turned by
   the wrist joint's twist about the arm, following pronation but not the hand bending
-  (skeleton.sensor_bone_orientations). A mounting rotation only matters for the raw sensor
+  (sensors.sensor_bone_orientations). A mounting rotation only matters for the raw sensor
   signals (`raw_sensor_signals`).
 * Acceleration = central second difference of the sensor's world position over +-k frames,
   (p[t+k] - 2 p[t] + p[t-k]) / (k dt)^2 with k = ACC_K = 4 at 60 Hz (+-67 ms, TIP's choice).
@@ -40,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import skeleton as sk
+from .sensors import DEFAULT_SENSORS, sensor_bone_orientations, sensor_joints, sensor_list
 
 GRAVITY = 9.80665
 ACC_K = 4
@@ -50,6 +53,7 @@ CONTACT_WINDOW = 30
 PELVIS_SENSOR_OFFSET = (0.0, 0.05, -0.11)
 WRIST_SENSOR_OFFSET = (0.03, 0.035, 0.0)     # x mirrored: towards the elbow
 HEAD_SENSOR_OFFSET = (0.0, 0.13, 0.0)
+CHEST_SENSOR_OFFSET = (0.0, 0.02, 0.10)
 SHIN_FRACTION = 0.4
 SHIN_FORWARD = 0.05
 
@@ -80,15 +84,16 @@ class Augmentation:
 class Sample:
     name: str
     fps: float
-    imu_orientation: np.ndarray      # (T,6,3,3) float32, bone -> model
-    imu_acceleration: np.ndarray     # (T,6,3) float32, m/s^2, model frame, gravity removed
+    imu_orientation: np.ndarray      # (T,N,3,3) float32, bone -> model, N = len(sensors)
+    imu_acceleration: np.ndarray     # (T,N,3) float32, m/s^2, model frame, gravity removed
     local_rot: np.ndarray            # (T,24,3,3) float32, joint 0 global
     root_velocity: np.ndarray        # (T,3) float32, m/s, model frame
     foot_contact: np.ndarray         # (T,2) float32 in {0, 1}
     positions: np.ndarray            # (T,24,3) float32, model frame
     offsets: np.ndarray              # (24,3) float32 (after body scaling)
     root_pos: np.ndarray             # (T,3) float32
-    sensor_position: np.ndarray      # (T,6,3) float32
+    sensor_position: np.ndarray      # (T,N,3) float32
+    sensors: tuple = DEFAULT_SENSORS # segment names, the order of the IMU arrays
 
     @property
     def num_frames(self) -> int:
@@ -101,19 +106,32 @@ def _ry(angle: float) -> np.ndarray:
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
-def sensor_offsets(offsets) -> np.ndarray:
-    """(6,3) sensor positions in their bone frames for a skeleton with these offsets."""
+def _sensor_offset(name: str, o: np.ndarray, s: float) -> np.ndarray:
+    """Where the sensor of segment `name` sits, in its bone frame, from its joint (module
+    docstring's table); o: the skeleton's offsets, s: its scale against the default body."""
+    wx, wy, wz = WRIST_SENSOR_OFFSET
+    if name == "pelvis":
+        return np.asarray(PELVIS_SENSOR_OFFSET) * s
+    if name == "left_wrist":
+        return np.array([-wx, wy, wz]) * s        # left arm points +X: the elbow is at -X
+    if name == "right_wrist":
+        return np.array([wx, wy, wz]) * s
+    if name in ("left_shin", "right_shin"):
+        ankle = sk.JOINT_NAMES.index(name.replace("shin", "ankle"))
+        return SHIN_FRACTION * o[ankle] + np.array([0.0, 0.0, SHIN_FORWARD * s])
+    if name == "head":
+        return np.asarray(HEAD_SENSOR_OFFSET) * s
+    if name == "chest":
+        return np.asarray(CHEST_SENSOR_OFFSET) * s
+    raise ValueError(f"segment {name!r} has no sensor placement in synthesis.py (_sensor_offset)")
+
+
+def sensor_offsets(offsets, sensors=DEFAULT_SENSORS) -> np.ndarray:
+    """(N,3) positions of the sensors (segment names) in their bone frames for a skeleton with
+    these offsets."""
     o = np.asarray(offsets, dtype=np.float64)
     s = sk.leg_height(o) / sk.leg_height(sk.DEFAULT_OFFSETS)
-    wx, wy, wz = WRIST_SENSOR_OFFSET
-    out = np.zeros((6, 3))
-    out[0] = np.asarray(PELVIS_SENSOR_OFFSET) * s
-    out[1] = np.array([-wx, wy, wz]) * s          # left arm points +X: the elbow is at -X
-    out[2] = np.array([wx, wy, wz]) * s
-    for i, ankle in ((3, 7), (4, 8)):
-        out[i] = SHIN_FRACTION * o[ankle] + np.array([0.0, 0.0, SHIN_FORWARD * s])
-    out[5] = np.asarray(HEAD_SENSOR_OFFSET) * s
-    return out
+    return np.stack([_sensor_offset(n, o, s) for n in sensor_list(sensors)])
 
 
 def second_difference(pos: np.ndarray, fps: float, k: int = ACC_K) -> np.ndarray:
@@ -174,7 +192,7 @@ def with_orientation_errors(bones, rng, augment) -> tuple:
 
 
 def _hold_drops(rng, x: np.ndarray, rate: float, max_len: int) -> np.ndarray:
-    """x (T,6,...): per sensor, drop-outs hold the last sample."""
+    """x (T,N,...): per sensor, drop-outs hold the last sample."""
     T = x.shape[0]
     for s in range(x.shape[1]):
         starts = np.nonzero(rng.random(T) < rate)[0]
@@ -250,10 +268,12 @@ def vary_motion(motion: sk.Motion, rng, augment, donors=()) -> sk.Motion:
 
 # ------------------------------------------------------------------------------ synthesis
 def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K,
-               wrist: str = "hand") -> Sample:
+               wrist: str = "hand", sensors=DEFAULT_SENSORS) -> Sample:
     """Motion -> Sample. augment: None/False (exact signals), True (default Augmentation) or an
     Augmentation; rng: numpy Generator (default seeded 0) for the augmentation draws; wrist:
-    where the wrist sensors are, "hand" (the shipped model's placement) or "forearm" (straps)."""
+    where the wrist sensors are, "hand" (the shipped model's placement) or "forearm" (straps);
+    sensors: the segment names to synthesise, in this order."""
+    sensors = sensor_list(sensors)
     if augment is True:
         augment = Augmentation()
     if augment and rng is None:
@@ -282,12 +302,12 @@ def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K,
             local[:, 0] = r @ local[:, 0]
             root = root @ r.T
     g, p = sk.forward_kinematics(local, root, offsets)
-    bone = sk.sensor_bone_orientations(g, local, wrist)                                  # (T,6,3,3)
-    spos = p[:, sk.SENSOR_JOINTS] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(offsets))
+    bone = sensor_bone_orientations(g, local, wrist, sensors)                            # (T,N,3,3)
+    spos = p[:, sensor_joints(sensors)] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(offsets, sensors))
     acc = second_difference(spos, fps, k)
     ori = bone.copy()
     if augment:
-        n = 6
+        n = len(sensors)
         ori, drift = with_orientation_errors(ori, rng, augment)
         T = ori.shape[0]
         acc = np.einsum("sab,tsb->tsa", drift, acc)
@@ -304,7 +324,8 @@ def synthesize(motion: sk.Motion, rng=None, augment=None, k: int = ACC_K,
         imu_orientation=ori.astype(f32), imu_acceleration=acc.astype(f32),
         local_rot=local.astype(f32), root_velocity=central_velocity(root, fps).astype(f32),
         foot_contact=foot_contact_labels(p, fps), positions=p.astype(f32),
-        offsets=offsets.astype(f32), root_pos=root.astype(f32), sensor_position=spos.astype(f32))
+        offsets=offsets.astype(f32), root_pos=root.astype(f32), sensor_position=spos.astype(f32),
+        sensors=sensors)
 
 
 # ------------------------------------------------------------------------------ raw sensors
@@ -334,20 +355,24 @@ def angular_rate_sensor_frame(sensor_orientation, fps: float) -> np.ndarray:
     return w / span.reshape((T,) + (1,) * (w.ndim - 1))
 
 
-def raw_sensor_signals(motion: sk.Motion, mounting=None, k: int = ACC_K) -> dict:
-    """Ideal raw signals of the six sensors (no noise) for a Motion.
+def raw_sensor_signals(motion: sk.Motion, mounting=None, k: int = ACC_K, sensors=DEFAULT_SENSORS) -> dict:
+    """Ideal raw signals of the sensors (segment names; no noise) for a Motion.
 
-    mounting: (6,3,3) sensor -> bone rotations (identity if None). Returns float64 arrays:
-    sensor_orientation (T,6,3,3) sensor -> model, bone_orientation (T,6,3,3),
-    position (T,6,3) model frame, acceleration (T,6,3) model frame m/s^2 gravity removed,
-    specific_force_g (T,6,3) sensor frame in g, angular_rate (T,6,3) sensor frame rad/s."""
+    mounting: (N,3,3) sensor -> bone rotations (identity if None). Returns float64 arrays:
+    sensor_orientation (T,N,3,3) sensor -> model, bone_orientation (T,N,3,3),
+    position (T,N,3) model frame, acceleration (T,N,3) model frame m/s^2 gravity removed,
+    specific_force_g (T,N,3) sensor frame in g, angular_rate (T,N,3) sensor frame rad/s."""
+    sensors = sensor_list(sensors)
     fps = float(motion.fps)
     g, p = sk.forward_kinematics(np.asarray(motion.local_rot, np.float64),
                                  np.asarray(motion.root_pos, np.float64), motion.offsets)
-    bone = sk.sensor_bone_orientations(g, motion.local_rot)
-    spos = p[:, sk.SENSOR_JOINTS] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(motion.offsets))
+    bone = sensor_bone_orientations(g, motion.local_rot, "hand", sensors)
+    spos = p[:, sensor_joints(sensors)] + np.einsum("tsab,sb->tsa", bone, sensor_offsets(motion.offsets, sensors))
     acc = second_difference(spos, fps, k)
-    m = np.broadcast_to(np.eye(3), (6, 3, 3)) if mounting is None else np.asarray(mounting, np.float64)
+    n = len(sensors)
+    m = np.broadcast_to(np.eye(3), (n, 3, 3)) if mounting is None else np.asarray(mounting, np.float64)
+    if m.shape != (n, 3, 3):
+        raise ValueError(f"mounting must be ({n},3,3) for {n} sensors, got {m.shape}")
     sens = bone @ m
     return {"sensor_orientation": sens, "bone_orientation": bone, "position": spos,
             "acceleration": acc, "specific_force_g": specific_force_sensor_frame(sens, acc),

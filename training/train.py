@@ -55,6 +55,7 @@ from .errors import CommandError, UsageError
 from .files import atomic_torch_save
 from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch, non_finite_tensors
 from .rarity import clip_rarity
+from .sensors import DEFAULT_SENSORS
 from .synthesis import Augmentation, synthesize, vary_motion
 
 REPO = Path(__file__).resolve().parents[1]
@@ -149,7 +150,7 @@ class StreamBatcher:
 
     def __init__(self, motions, batch: int, window: int, rng: np.random.Generator,
                  augment: Augmentation | None = Augmentation(), wrist: str = "hand",
-                 rare_boost: float = 0.0):
+                 rare_boost: float = 0.0, sensors=DEFAULT_SENSORS):
         self.motions = [m for m in motions if m.num_frames >= window + 1]
         if not self.motions:
             raise UsageError(f"no training clip has more than {window} frames (60 Hz)")
@@ -160,7 +161,7 @@ class StreamBatcher:
         self.p = weights / weights.sum()
         self.total_frames = int(lengths.sum())
         self.batch, self.window, self.rng, self.augment = batch, window, rng, augment
-        self.wrist = wrist
+        self.wrist, self.sensors = wrist, tuple(sensors)
         self.samples = [None] * batch
         self.pos = [0] * batch
 
@@ -181,7 +182,7 @@ class StreamBatcher:
         while True:   # a sped-up short clip can end up shorter than a window: draw again
             m = self.motions[int(self.rng.choice(len(self.motions), p=self.p))]
             m = vary_motion(m, self.rng, self.augment, self.motions)   # donors are >= a window too
-            s = synthesize(m, self.rng, self.augment, wrist=self.wrist)
+            s = synthesize(m, self.rng, self.augment, wrist=self.wrist, sensors=self.sensors)
             if s.num_frames >= self.window:
                 break
         self.samples[i] = s
@@ -354,11 +355,12 @@ def _play_streams(base: StreamBatcher, streams: int, seed: int, k: int, slots, r
         ready.send(f"{type(e).__name__}: {e}")
 
 
-def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator):
+def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator, sensors=DEFAULT_SENSORS):
+    """sensors: the network's (ModelConfig.sensors), synthesised in its order."""
     base = StreamBatcher(motions, cfg.batch, cfg.window, rng,
                          Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg,
                                       spine_jitter_deg=cfg.spine_jitter_deg, trunk_swap=cfg.trunk_swap),
-                         wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost)
+                         wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost, sensors=sensors)
     return ParallelBatcher(base, cfg.data_workers, cfg.seed) if cfg.data_workers > 0 else base
 
 
@@ -460,14 +462,15 @@ def without_root_jumps(motions) -> tuple:
     return kept, [m.name for m in dropped]
 
 
-def validation_set(motions, cfg: TrainConfig) -> list:
-    """Deterministic: evenly spaced clips, no augmentation, at most val_max_frames each."""
+def validation_set(motions, cfg: TrainConfig, sensors=DEFAULT_SENSORS) -> list:
+    """Deterministic: evenly spaced clips, no augmentation, at most val_max_frames each, of the
+    network's sensors."""
     if len(motions) > cfg.val_clips:
         idx = np.linspace(0, len(motions) - 1, cfg.val_clips).round().astype(int)
         motions = [motions[i] for i in idx]
     out = []
     for m in motions:
-        s = synthesize(m, wrist=cfg.wrist_sensor)
+        s = synthesize(m, wrist=cfg.wrist_sensor, sensors=sensors)
         n = min(s.num_frames, cfg.val_max_frames)
         out.append({k: torch.from_numpy(getattr(s, k)[:n][None]) for k in
                     ("imu_orientation", "imu_acceleration", "local_rot", "root_velocity", "foot_contact")}
@@ -713,10 +716,10 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
                                  f"training them for the {cfg.wrist_sensor} is not supported")
             net.anchor_wrists_on_forearm()
             print("train: the wrist sensors move from the hands to the forearms (wrist straps)")
-    batcher = make_batcher(motions, cfg, rng)
+    batcher = make_batcher(motions, cfg, rng, net.config.sensors)
     if cfg.rare_boost > 0:
         print(f"train: rare poses boosted ({rarity_summary(batcher)})")
-    val = validation_set(val_motions or [], cfg) if val_motions else []
+    val = validation_set(val_motions or [], cfg, net.config.sensors) if val_motions else []
     steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
     print(f"train: {len(batcher.motions)} clips, {batcher.total_frames} frames "
           f"({steps_per_epoch} steps/epoch), {len(val)} val clips, device {device}, blas {blas}, "

@@ -9,6 +9,7 @@ import torch
 
 from training import evaluate as ev
 from training import ort, procedural
+from training import sensors as se
 from training import skeleton as sk
 from training.model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet
 
@@ -40,8 +41,8 @@ def test_baseline_puts_sensor_orientations_on_their_bones():
     clip = ev.synthesize_clip(m, rng)
     pred = ev.predict_baseline(clip)
     g, _ = sk.forward_kinematics(pred.local_rot, np.zeros((len(pred.local_rot), 3)), clip.offsets)
-    np.testing.assert_allclose(g[:, sk.SENSOR_JOINTS], clip.imu_orientation, atol=1e-5)
-    rest = [j for j in range(24) if j not in sk.SENSOR_JOINTS]
+    np.testing.assert_allclose(g[:, se.sensor_joints()], clip.imu_orientation, atol=1e-5)
+    rest = [j for j in range(24) if j not in se.sensor_joints()]
     np.testing.assert_allclose(pred.local_rot[:, rest], np.broadcast_to(np.eye(3), (len(g), len(rest), 3, 3)))
     assert not pred.root_velocity.any()
     # Noise is realistic, not absent: the pelvis orientation differs from the truth by a little.
@@ -54,7 +55,7 @@ def test_noise_none_gives_perfect_sensors_and_says_so(tmp_path, fixture_dir):
     clip = ev.synthesize_clip(m, np.random.default_rng(0), noise="none")
     g, _ = sk.forward_kinematics(clip.local_rot, np.zeros((len(clip.local_rot), 3)), clip.offsets)
     # every sensor reports its bone exactly, so the baseline's own bones carry no error at all
-    np.testing.assert_allclose(clip.imu_orientation, g[:, sk.SENSOR_JOINTS], atol=1e-5)
+    np.testing.assert_allclose(clip.imu_orientation, g[:, se.sensor_joints()], atol=1e-5)
     pred = ev.predict_baseline(clip)
     assert ev.rotation_angle_deg(pred.local_rot[:, 0], clip.local_rot[:, 0]).max() < 0.05
     with pytest.raises(ValueError, match="noise 'loud'"):

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 import torch
 
-from training import procedural, skeleton as sk, synthesis as sy
-from training.model import (MIRROR_SENSORS, MirrorEnsemble, ModelConfig, PoseNet, STATE_LAYERS,
+from training import procedural, sensors as se, skeleton as sk, synthesis as sy
+from training.model import (MirrorEnsemble, ModelConfig, PoseNet, STATE_LAYERS,
                             STATE_SIZE, count_parameters,
                             forward_kinematics_torch, heading_rotation, matrix_to_rot6d, rot6d_to_matrix)
 
@@ -200,8 +200,8 @@ def test_anchored_sensor_bones_start_at_their_measured_orientations():
     with torch.no_grad():
         rot = net(o, a)[0][0].double().numpy()
     g, _ = sk.forward_kinematics(rot, np.zeros((rot.shape[0], 3)), sk.DEFAULT_OFFSETS)
-    assert net.anchor_joints == sk.SENSOR_JOINTS
-    for si, j in enumerate(sk.SENSOR_JOINTS[1:], start=1):
+    assert net.anchor_joints == se.sensor_joints()
+    for si, j in enumerate(se.sensor_joints()[1:], start=1):
         err = np.degrees(sk.angle_between_rots(g[:, j], s.imu_orientation[:, si].astype(np.float64)))
         assert err.max() < 1e-3, (j, err.max())
     # the residual is live: other output weights move the sensor bones off the measurement
@@ -234,7 +234,7 @@ def test_hand_anchored_checkpoint_moves_its_wrist_anchoring_to_the_forearm():
     g = globals_now()
     assert np.degrees(sk.angle_between_rots(g[:, 20:22], wrist_sensors)).max() < 1e-3   # hands
     net.anchor_wrists_on_forearm()
-    assert net.config.wrist_anchor == "forearm" and net.anchor_joints == sk.SENSOR_BONES
+    assert net.config.wrist_anchor == "forearm" and net.anchor_joints == se.sensor_bones("forearm")
     g = globals_now()
     assert np.degrees(sk.angle_between_rots(g[:, 18:20], wrist_sensors)).max() < 1e-3   # forearms
     # the wrist rows start at rest, the other joints keep their outputs
@@ -260,7 +260,7 @@ def test_anchored_network_streams_and_stays_heading_equivariant():
 
 def _mirrored(o, a):
     m = torch.diag(torch.tensor([-1.0, 1.0, 1.0]))
-    return m, m @ o[:, :, MIRROR_SENSORS] @ m, a[:, :, MIRROR_SENSORS] @ m
+    return m, m @ o[:, :, se.mirror_indices()] @ m, a[:, :, se.mirror_indices()] @ m
 
 
 def test_mirror_ensemble_is_exactly_mirror_equivariant_where_the_single_network_is_not():

@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from training import sensors as se
 from training import skeleton as sk
 
 
@@ -14,7 +15,7 @@ def test_contract_names_and_parents():
     assert sk.JOINT_NAMES[byname["head"]] == "neck"
     assert sk.JOINT_NAMES[byname["left_collar"]] == "spine3"
     assert sk.JOINT_NAMES[byname["right_foot"]] == "right_ankle"
-    assert [sk.JOINT_NAMES[j] for j in sk.SENSOR_JOINTS] == ["pelvis", "left_wrist", "right_wrist",
+    assert [sk.JOINT_NAMES[j] for j in se.sensor_joints()] == ["pelvis", "left_wrist", "right_wrist",
                                                              "left_knee", "right_knee", "head"]
     assert [sk.JOINT_NAMES[j] for j in sk.FOOT_JOINTS] == ["left_foot", "right_foot"]
 
@@ -129,7 +130,7 @@ def test_wrist_sensors_follow_the_forearm_and_its_twist_not_the_hand_bend(rng):
     bend = sk.axis_angle_to_rot(bend_axis)
     local[:, 20] = bend @ sk.rot_axis("x", twist)                     # swing times twist
     g, _ = sk.forward_kinematics(local, np.zeros((T, 3)))
-    ori = sk.sensor_bone_orientations(g, local, "forearm")
+    ori = se.sensor_bone_orientations(g, local, "forearm")
     assert ori.shape == (T, 6, 3, 3)
     expected = g[:, 18] @ sk.rot_axis("x", twist)
     np.testing.assert_allclose(ori[:, 1], expected, atol=1e-9)
@@ -139,14 +140,14 @@ def test_wrist_sensors_follow_the_forearm_and_its_twist_not_the_hand_bend(rng):
     # a pure twist of the wrist turns the sensor exactly as the hand
     local[:, 20] = sk.rot_axis("x", twist)
     g, _ = sk.forward_kinematics(local, np.zeros((T, 3)))
-    np.testing.assert_allclose(sk.sensor_bone_orientations(g, local, "forearm")[:, 1], g[:, 20], atol=1e-9)
+    np.testing.assert_allclose(se.sensor_bone_orientations(g, local, "forearm")[:, 1], g[:, 20], atol=1e-9)
     # the other sensors report their own bones; the right wrist is at rest, so it is its forearm
     np.testing.assert_allclose(ori[:, [0, 3, 4, 5]], g[:, [0, 4, 5, 15]])
     np.testing.assert_allclose(ori[:, 2], g[:, 19], atol=1e-12)
     # on the back of the hands (the default, the shipped model's placement) they report the hands
-    np.testing.assert_allclose(sk.sensor_bone_orientations(g, local), g[:, sk.SENSOR_JOINTS])
+    np.testing.assert_allclose(se.sensor_bone_orientations(g, local), g[:, se.sensor_joints()])
     with pytest.raises(ValueError, match="wrist sensor place"):
-        sk.sensor_bones("elbow")
+        se.sensor_bones("elbow")
 
 
 def test_twist_about_x_splits_swing_and_twist(rng):
@@ -159,12 +160,17 @@ def test_twist_about_x_splits_swing_and_twist(rng):
     np.testing.assert_allclose(sk.twist_about_x(swing), np.broadcast_to(np.eye(3), (200, 3, 3)), atol=1e-9)
 
 
-def test_sensor_names_are_the_engines_segment_table_in_its_order():
-    # The engine's public header is the one table of sensor segments; training must not drift.
+def test_segment_table_is_the_headers_enum_and_sets_the_default_sensors():
+    # The engine's table (segments.def) and its public header's enum must agree row for row;
+    # training reads the table, so a drifted header would feed a model other sensors than it names.
     import re
     from pathlib import Path
     header = (Path(__file__).resolve().parents[2] / "Packages" / "com.mocap.imu" / "Native~" / "include"
               / "mocap_imu.h").read_text()
-    segments = sorted((int(v), name.lower()) for name, v in re.findall(r"MOCAP_SEGMENT_([A-Z_]+)\s*=\s*(\d+)", header))
-    assert [v for v, _ in segments] == list(range(len(segments)))
-    assert [name for _, name in segments] == sk.SENSOR_NAMES
+    enum = {name: int(v) for name, v in re.findall(r"MOCAP_SEGMENT_([A-Z0-9_]+)\s*=\s*(\d+)", header)}
+    assert enum == {s.enum: s.id for s in se.SEGMENTS}
+    assert [s.name for s in se.SEGMENTS] == [e.lower() for e, _ in sorted(enum.items(), key=lambda kv: kv[1])]
+    # the default set is contract 1's six, in the contract's order, on the contract's joints
+    assert se.DEFAULT_SENSORS == ("pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head")
+    assert [sk.JOINT_NAMES[j] for j in se.sensor_joints()] == ["pelvis", "left_wrist", "right_wrist",
+                                                               "left_knee", "right_knee", "head"]

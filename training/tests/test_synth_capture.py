@@ -13,7 +13,7 @@ from training import synth_capture as sc
 
 def test_trajectory_resampling_keeps_the_signal():
     m = procedural.make_motion("walk", 2.0, seed=1)
-    ori, acc = sc.kinematic_signals(m)
+    ori, acc = sc.sensor_signals(m)
     t, q, a = sc.resample_signals(ori, acc, m.fps)
     assert np.isclose(t[1] - t[0], 0.01) and t[-1] <= (m.num_frames - 1) / m.fps + 1e-9
     # Samples that fall on a 60 Hz frame (every 3rd 60 Hz frame = every 5th 100 Hz sample).
