@@ -58,7 +58,7 @@ def test_run_onnx_matches_closed_form_and_streams(fixtures):
 def test_contract_violation_is_reported(fixtures):
     ori = np.zeros((1, 2, 6, 3, 3), np.float32)
     acc = np.zeros((1, 2, 6, 3), np.float32)
-    with pytest.raises(ort.OnnxRuntimeError, match="mocap.contract_version is '2'"):
+    with pytest.raises(ort.OnnxRuntimeError, match="mocap.contract_version is '3'"):
         ort.run_onnx(fixtures["wrong_version"], ori, acc)
     with pytest.raises(ort.OnnxRuntimeError, match="not a model ONNX Runtime can load"):
         ort.run_onnx(fixtures["not_onnx"], ori, acc)
@@ -74,3 +74,39 @@ def test_model_info(fixtures):
     assert info["state_layers"] == 2 and info["state_size"] == 4
     assert info["rest_offsets"].shape == (24, 3)
     assert info["frame_rate"] == 60.0
+
+
+def test_contract_two_fixtures_differ_from_v2_chest_in_their_one_defect(fixtures):
+    """The engine's refusal tests rely on each v2 fixture breaking exactly one rule; every file is
+    valid ONNX (the defects are the contract's), and a contract-1 model names no mask."""
+    import onnx
+
+    def facts(name):
+        m = onnx.load(fixtures[name])
+        onnx.checker.check_model(m)
+        meta = {p.key: p.value for p in m.metadata_props}
+        inputs = {i.name: [d.dim_param or d.dim_value for d in i.type.tensor_type.shape.dim]
+                  for i in m.graph.input}
+        return meta, inputs
+
+    meta, inputs = facts("v2_chest")
+    assert meta["mocap.contract_version"] == "2"
+    assert meta["mocap.sensor_order"] == "pelvis,left_wrist,right_wrist,left_shin,right_shin,head,chest"
+    assert meta["mocap.sensor_required"] == "1,1,1,1,1,1,0"
+    assert inputs == {"imu_orientation": ["B", "T", 7, 3, 3], "imu_acceleration": ["B", "T", 7, 3],
+                      "imu_mask": ["B", "T", 7], "state_in_h": [2, "B", 4], "state_in_c": [2, "B", 4]}
+    changed = {
+        "v2_unknown_segment": ({"mocap.sensor_order": meta["mocap.sensor_order"].replace("chest", "tail")}, {}),
+        "v2_duplicate_segment": ({"mocap.sensor_order": meta["mocap.sensor_order"].replace("chest", "head")}, {}),
+        "v2_required_length": ({"mocap.sensor_required": "1,1,1,1,1,1"}, {}),
+        "v2_missing_mask": ({}, {"imu_mask": None}),
+        "v2_wrong_sensor_dim": ({}, {"imu_orientation": ["B", "T", 6, 3, 3]}),
+    }
+    for name, (meta_change, input_change) in changed.items():
+        want_meta = {**meta, **meta_change}
+        want_inputs = {k: v for k, v in {**inputs, **input_change}.items() if v is not None}
+        assert facts(name) == (want_meta, want_inputs), name
+    v1_meta, v1_inputs = facts("valid")
+    assert facts("v1_with_mask") == (v1_meta, {**v1_inputs, "imu_mask": ["B", "T", 6]})
+    assert "mocap.sensor_required" not in v1_meta and v1_meta["mocap.contract_version"] == "1"
+    assert facts("wrong_version")[0]["mocap.contract_version"] == "3"

@@ -14,14 +14,34 @@
     state_out_c            = 0.5 * state_in_c + 1
 
 so streaming one frame per call and one call for a whole clip give the same results, which the
-tests check. The other variants break the contract in one way each; the engine must refuse them
-with a message naming the difference. Needs only the `onnx` Python package (Debian python3-onnx).
+tests check.
+
+`v2_chest.onnx` follows contract version 2: its own sensor list, the six of `valid` plus the
+chest (`mocap.sensor_order` pelvis,left_wrist,right_wrist,left_shin,right_shin,head,chest;
+`mocap.sensor_required` 1,1,1,1,1,1,0: the chest is optional), inputs imu_orientation
+[B, T, 7, 3, 3], imu_acceleration [B, T, 7, 3], imu_mask [B, T, 7], state [L = 2, B, H = 4]:
+
+    m6                       = imu_mask[b, t, 6]                              (the chest's mask)
+    joint_rotations[b, t, 0] = imu_orientation[b, t, 0]
+    joint_rotations[b, t, 9] = m6 * imu_orientation[b, t, 6] + (1 - m6) * I    (I: identity 3x3)
+    joint_rotations[b, t, j] = I                                               (every other j)
+    root_velocity[b, t, :]   = (sum over k of imu_mask[b, t, k], m6, imu_acceleration[b, t, 6, 1])
+    foot_contact             = 0
+    state_out_h              = state_in_h + 1
+    state_out_c              = state_in_c
+
+so a test sees which sensors the engine marked present, that the chest reached joint 9, and what
+the engine fed as the chest's acceleration.
+
+The other variants break the contract in one way each; the engine must refuse them with a
+message naming the difference. Every variant is checked with onnx.checker (the defects are in
+the contract, not in ONNX). Needs only the `onnx` Python package (Debian python3-onnx).
 """
 import os
 import sys
 
 import numpy as np
-from onnx import TensorProto, helper, save
+from onnx import TensorProto, checker, helper, save
 
 JOINTS = ["pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
           "left_ankle", "right_ankle", "spine3", "left_foot", "right_foot", "neck", "left_collar",
@@ -34,11 +54,16 @@ OFFSETS[0] = (0, 0.93, 0)
 for j in range(1, 24):
     OFFSETS[j] = (0.05 * ((j % 3) - 1), 0.1 if j in (3, 6, 9, 12, 15) else -0.1, 0.01)
 SENSORS = "pelvis,left_wrist,right_wrist,left_shin,right_shin,head"
+SENSORS_V2 = SENSORS + ",chest"
+REQUIRED_V2 = "1,1,1,1,1,1,0"
+CHEST, CHEST_JOINT = 6, 9
 LAYERS, SIZE = 2, 4
 
 VARIANTS = ["valid", "wrong_input_name", "wrong_rank", "missing_metadata", "missing_joint_names",
             "wrong_version", "state_mismatch", "fixed_batch", "wrong_joint_name", "symbolic_dims",
-            "wrong_output_shape", "rank_nine_output", "fails_on_impact"]
+            "wrong_output_shape", "rank_nine_output", "fails_on_impact", "v1_with_mask",
+            "v2_chest", "v2_unknown_segment", "v2_required_length", "v2_missing_mask",
+            "v2_wrong_sensor_dim", "v2_duplicate_segment"]
 
 
 def metadata(**override):
@@ -63,8 +88,103 @@ def metadata(**override):
     return md
 
 
+def _const(name, values, dtype=np.int64):
+    arr = np.asarray(values, dtype=dtype)
+    return helper.make_tensor(name, TensorProto.INT64 if dtype == np.int64 else TensorProto.FLOAT,
+                              arr.shape, arr.reshape(-1).tolist())
+
+
+def _outputs(B):
+    return [
+        helper.make_tensor_value_info("joint_rotations", TensorProto.FLOAT, [B, "T", 24, 3, 3]),
+        helper.make_tensor_value_info("root_velocity", TensorProto.FLOAT, [B, "T", 3]),
+        helper.make_tensor_value_info("foot_contact", TensorProto.FLOAT, [B, "T", 2]),
+        helper.make_tensor_value_info("state_out_h", TensorProto.FLOAT, [LAYERS, B, SIZE]),
+        helper.make_tensor_value_info("state_out_c", TensorProto.FLOAT, [LAYERS, B, SIZE]),
+    ]
+
+
+def _model(nodes, inputs, outputs, inits, md):
+    graph = helper.make_graph(nodes, "mocap_fixture", inputs, outputs, inits)
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)],
+                              producer_name="make_onnx_fixtures")
+    model.ir_version = 7
+    helper.set_model_props(model, md)
+    return model
+
+
+def build_v2(variant="v2_chest"):
+    """The ModelProto of a contract-2 variant (formulas in the module docstring)."""
+    n = 7
+    B = "B"
+    ori_sensors = 6 if variant == "v2_wrong_sensor_dim" else n
+    inputs = [
+        helper.make_tensor_value_info("imu_orientation", TensorProto.FLOAT, [B, "T", ori_sensors, 3, 3]),
+        helper.make_tensor_value_info("imu_acceleration", TensorProto.FLOAT, [B, "T", n, 3]),
+        helper.make_tensor_value_info("imu_mask", TensorProto.FLOAT, [B, "T", n]),
+        helper.make_tensor_value_info("state_in_h", TensorProto.FLOAT, [LAYERS, B, SIZE]),
+        helper.make_tensor_value_info("state_in_c", TensorProto.FLOAT, [LAYERS, B, SIZE]),
+    ]
+    inits = [
+        _const("first", [0]), _const("after_first", [1]),
+        _const("chest", [CHEST]), _const("after_chest", [CHEST + 1]),
+        _const("axis2", [2]), _const("axis3", [3]), _const("axes34", [3, 4]),
+        _const("acc_start", [CHEST, 1]), _const("acc_end", [CHEST + 1, 2]), _const("axes23", [2, 3]),
+        _const("eye", np.eye(3, dtype=np.float32).reshape(1, 1, 1, 3, 3), np.float32),
+        _const("one", np.float32(1.0), np.float32),
+        _const("zero", np.float32(0.0), np.float32),
+        _const("zeros2", np.zeros(2, np.float32), np.float32),
+        _const("before_chest", [1, 1, CHEST_JOINT - 1, 1, 1]),
+        _const("after_chest_joints", [1, 1, 24 - CHEST_JOINT - 1, 1, 1]),
+    ]
+    nodes = []
+    if variant == "v2_missing_mask":
+        # No mask input: the graph makes its own (all ones) from the accelerations' shape.
+        inputs = [i for i in inputs if i.name != "imu_mask"]
+        nodes += [
+            helper.make_node("Slice", ["imu_acceleration", "first", "after_first", "axis3"], ["acc_x"]),
+            helper.make_node("Squeeze", ["acc_x", "axis3"], ["acc_x3"]),                   # [B,T,7]
+            helper.make_node("Mul", ["acc_x3", "zero"], ["acc_zero"]),
+            helper.make_node("Add", ["acc_zero", "one"], ["imu_mask"]),
+        ]
+    nodes += [
+        # the chest's mask, [B,T,1] and as [B,T,1,1,1] to scale its rotation
+        helper.make_node("Slice", ["imu_mask", "chest", "after_chest", "axis2"], ["m6"]),
+        helper.make_node("Unsqueeze", ["m6", "axes34"], ["m6_5"]),
+        helper.make_node("Sub", ["one", "m6_5"], ["not_m6_5"]),
+        # joint 0 = sensor 0; joint 9 = the chest where present, else identity
+        helper.make_node("Slice", ["imu_orientation", "first", "after_first", "axis2"], ["ori0"]),
+        helper.make_node("Slice", ["imu_orientation", "chest", "after_chest", "axis2"], ["ori6"]),
+        helper.make_node("Mul", ["m6_5", "ori6"], ["chest_seen"]),
+        helper.make_node("Mul", ["not_m6_5", "eye"], ["chest_rest"]),
+        helper.make_node("Add", ["chest_seen", "chest_rest"], ["joint9"]),
+        # identities [B,T,k,3,3] for the joints in between and after
+        helper.make_node("Shape", ["ori0"], ["one_joint_shape"]),
+        helper.make_node("Expand", ["eye", "one_joint_shape"], ["eye1"]),
+        helper.make_node("Tile", ["eye1", "before_chest"], ["rest_before"]),
+        helper.make_node("Tile", ["eye1", "after_chest_joints"], ["rest_after"]),
+        helper.make_node("Concat", ["ori0", "rest_before", "joint9", "rest_after"], ["joint_rotations"], axis=2),
+        # root_velocity = (sum of the mask, the chest's mask, chest acceleration y)
+        helper.make_node("ReduceSum", ["imu_mask", "axis2"], ["mask_sum"], keepdims=1),      # [B,T,1]
+        helper.make_node("Slice", ["imu_acceleration", "acc_start", "acc_end", "axes23"], ["acc6y"]),
+        helper.make_node("Squeeze", ["acc6y", "axis3"], ["acc6y3"]),                       # [B,T,1]
+        helper.make_node("Concat", ["mask_sum", "m6", "acc6y3"], ["root_velocity"], axis=2),
+        helper.make_node("Shape", ["mask_sum"], ["frame_shape"]),
+        helper.make_node("Expand", ["zeros2", "frame_shape"], ["foot_contact"]),           # [B,T,2]
+        helper.make_node("Add", ["state_in_h", "one"], ["state_out_h"]),
+        helper.make_node("Identity", ["state_in_c"], ["state_out_c"]),
+    ]
+    sensors = {"v2_unknown_segment": SENSORS + ",tail",
+               "v2_duplicate_segment": SENSORS + ",head"}.get(variant, SENSORS_V2)
+    required = "1,1,1,1,1,1" if variant == "v2_required_length" else REQUIRED_V2
+    md = metadata(contract_version="2", sensor_order=sensors, sensor_required=required)
+    return _model(nodes, inputs, _outputs(B), inits, md)
+
+
 def build(variant="valid"):
     """The ModelProto of one variant."""
+    if variant.startswith("v2_"):
+        return build_v2(variant)
     ori_name = "imu_orient" if variant == "wrong_input_name" else "imu_orientation"
     B = 1 if variant == "fixed_batch" else "B"
     ori_shape = [B, "T", 54] if variant == "wrong_rank" else [B, "T", 6, 3, 3]
@@ -74,6 +194,8 @@ def build(variant="valid"):
         helper.make_tensor_value_info("state_in_h", TensorProto.FLOAT, [LAYERS, B, SIZE]),
         helper.make_tensor_value_info("state_in_c", TensorProto.FLOAT, [LAYERS, B, SIZE]),
     ]
+    if variant == "v1_with_mask":   # a mask input contract 1 does not have (left unused)
+        inputs.append(helper.make_tensor_value_info("imu_mask", TensorProto.FLOAT, [B, "T", 6]))
     # symbolic_dims: the fixed output sizes left symbolic (as exporters often leave them);
     # wrong_output_shape: the same, but the graph really makes 12 joints (ONNX Runtime infers it).
     J = "J" if variant in ("symbolic_dims", "wrong_output_shape") else 24
@@ -85,11 +207,7 @@ def build(variant="valid"):
         helper.make_tensor_value_info("state_out_c", TensorProto.FLOAT, [LAYERS, B, SIZE]),
     ]
 
-    def const(name, values, dtype=np.int64):
-        arr = np.asarray(values, dtype=dtype)
-        return helper.make_tensor(name, TensorProto.INT64 if dtype == np.int64 else TensorProto.FLOAT,
-                                  arr.shape, arr.reshape(-1).tolist())
-
+    const = _const
     inits = [
         const("shape5", [0, 0, 6, 3, 3]),
         const("tile", [1, 1, 2 if variant == "wrong_output_shape" else 4, 1, 1]),
@@ -153,10 +271,6 @@ def build(variant="valid"):
             helper.make_node("Add", ["contact_shape", "extra"], ["asked_shape"]),
             helper.make_node("Reshape", ["contact3", "asked_shape"], ["foot_contact"]),
         ]
-    graph = helper.make_graph(nodes, "mocap_fixture", inputs, outputs, inits)
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)],
-                              producer_name="make_onnx_fixtures")
-    model.ir_version = 7
     override = {}
     if variant == "missing_metadata":
         md = {}
@@ -164,7 +278,7 @@ def build(variant="valid"):
         if variant == "missing_joint_names":
             override["joint_names"] = None
         if variant == "wrong_version":
-            override["contract_version"] = "2"
+            override["contract_version"] = "3"
         if variant == "state_mismatch":
             override["state_layers"] = "3"
         if variant == "wrong_joint_name":
@@ -172,8 +286,7 @@ def build(variant="valid"):
             names[18] = "left_forearm"
             override["joint_names"] = ",".join(names)
         md = metadata(**override)
-    helper.set_model_props(model, md)
-    return model
+    return _model(nodes, inputs, outputs, inits, md)
 
 
 def write_all(outdir):
@@ -181,7 +294,9 @@ def write_all(outdir):
     paths = {}
     for v in VARIANTS:
         paths[v] = os.path.join(outdir, v + ".onnx")
-        save(build(v), paths[v])
+        model = build(v)
+        checker.check_model(model)
+        save(model, paths[v])
     paths["not_onnx"] = os.path.join(outdir, "not_onnx.onnx")
     with open(paths["not_onnx"], "w") as f:
         f.write("this is not an ONNX model\n")
