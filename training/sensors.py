@@ -174,3 +174,18 @@ def mirror_indices(names=DEFAULT_SENSORS) -> list:
             raise ValueError(f"sensor {n} has no mirror image in {', '.join(names)} (add {other})")
         out.append(names.index(other))
     return out
+
+
+def node_ids(names=DEFAULT_SENSORS) -> list:
+    """A HiPNUC node id for each sensor (segment names) of a synthetic capture: the segment's
+    default node where it has one, else the lowest id no other sensor of the list uses."""
+    names = sensor_list(names)
+    taken = {segment(n).default_node for n in names} - {-1}
+    out = []
+    for n in names:
+        node = segment(n).default_node
+        if node < 0:
+            node = min(set(range(len(names) + len(taken) + 1)) - taken)
+            taken.add(node)
+        out.append(node)
+    return out

@@ -2,7 +2,7 @@
 
     python3 -m training synth-capture CLIP.bvh --out CAPTURE [--truth POSE.npz]
         [--truth-csv CSV] [--sensor-truth CSV] [--seed N] [--world nwu|enu] [--noise realistic|none]
-        [--lead-in S] [--keep-trajectory]
+        [--lead-in S] [--keep-trajectory] [--sensors SEGMENT,SEGMENT,...]
 
 Steps: BVH -> Motion (bvh.read_bvh + retarget.to_smpl_motion, 60 Hz) -> a lead-in of S seconds
 (default 1) blending from the rest T-pose (every joint identity, facing +Z, as the calibration
@@ -26,6 +26,7 @@ Ground truth pose file (--truth, default CAPTURE with suffix .truth.npz), numpy 
                                          t_session_start + i / fps
     prelude_s        ()  float           calibration prelude length in the capture
     clip, world, seed                    provenance
+    sensors          (N,) str            the capture's segments, in node order of the capture
 The same pose truth as CSV (--truth-csv, default CAPTURE with suffix .truth.csv), for tools
 without numpy (`mocapctl replay CAPTURE --model M --truth CAPTURE.truth.csv` prints the pose
 accuracy of the whole byte-level pipeline): a header line, then one line per truth frame:
@@ -52,11 +53,11 @@ from . import skeleton as sk
 from .cli import number_type
 from .errors import CommandError, UsageError
 from .files import same_file
-from .sensors import DEFAULT_SENSORS
+from .sensors import DEFAULT_SENSORS, node_ids, sensor_list
 
 TRAJECTORY_RATE = 100.0
-# The sensors of a trajectory file (Native~/docs/synth-trajectory.md): the engine's default set,
-# in the table's order, as mocapctl synth reads them.
+# The sensors of a capture unless --sensors names others: the engine's default set, in the
+# table's order, which mocapctl synth also writes without --sensors.
 TRAJECTORY_SENSORS = DEFAULT_SENSORS
 MAX_LEAD_IN_S = 60.0   # a blend from the T-pose into the clip; minutes of it would be a mistake
 
@@ -111,13 +112,15 @@ def resample_signals(orientation, acceleration, fps, rate=TRAJECTORY_RATE):
 
 
 def write_trajectory(path, t, quats, acc, comment="", sensors=TRAJECTORY_SENSORS):
-    """The text format of Native~/docs/synth-trajectory.md (1 + 7 N numbers per line), quats
-    (M,N,4) and acc (M,N,3) of the sensors (segment names) in their order."""
+    """The text format of Native~/docs/synth-trajectory.md: a `segments` line naming the sensors
+    (segment names) in their column order, then 1 + 7 N numbers per line, quats (M,N,4) and acc
+    (M,N,3)."""
     if quats.shape[1] != len(sensors) or acc.shape[1] != len(sensors):
         raise ValueError(f"{len(sensors)} sensors, but quats {quats.shape} and acc {acc.shape}")
     with open(path, "w") as f:
         f.write("# synth-capture trajectory" + (f": {comment}" if comment else "") + "\n")
-        f.write("# t  then per segment (" + ", ".join(sensors) + "): qw qx qy qz ax ay az\n")
+        f.write("segments " + " ".join(sensors) + "\n")
+        f.write("# t  then per segment: qw qx qy qz ax ay az\n")
         for k in range(len(t)):
             vals = [f"{t[k]:.5f}"]
             for s in range(len(sensors)):
@@ -189,14 +192,21 @@ def _remove_new(paths, existed: dict) -> None:
 
 def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="nwu",
                   noise="realistic", lead_in=1.0, keep_trajectory=False, motion=None,
-                  truth_csv=None):
+                  truth_csv=None, sensors=TRAJECTORY_SENSORS):
     """Write CAPTURE, its sensor truth CSV and the pose truth .npz; returns a dict of paths and
-    facts. `motion` (a Motion) replaces reading bvh_path when given."""
+    facts. `motion` (a Motion) replaces reading bvh_path when given. sensors: the segments the
+    capture carries (node ids from sensors.node_ids)."""
     from .ort import mocapctl_path
     if not (isinstance(seed, (int, np.integer)) and 0 <= int(seed) < 2 ** 64):
         raise UsageError(f"--seed {seed}: a whole number from 0 to 2^64-1")
     if not (math.isfinite(lead_in) and 0.0 <= lead_in <= MAX_LEAD_IN_S):
         raise UsageError(f"--lead-in {lead_in}: seconds from 0 to {MAX_LEAD_IN_S:g}")
+    try:
+        sensors = sensor_list(sensors)
+        from .synthesis import sensor_offsets
+        sensor_offsets(sk.DEFAULT_OFFSETS, sensors)   # a segment without a placement: refused now
+    except ValueError as e:
+        raise UsageError(f"--sensors: {e}") from e
     if str(out).endswith(("/", os.sep)):
         raise UsageError(f"--out {out}: names a folder; give the capture file to write")
     out = Path(out)
@@ -227,16 +237,19 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
     if motion.num_frames == 0:
         raise UsageError(f"{bvh_path}: the clip is shorter than one frame at {sk.MODEL_FPS} Hz")
     full = with_lead_in(motion, lead_in)
-    ori, acc = sensor_signals(full)
+    ori, acc = sensor_signals(full, sensors)
     t, quats, acc100 = resample_signals(ori, acc, full.fps)
     out.parent.mkdir(parents=True, exist_ok=True)
     existed = {p: p.exists() for p in outputs.values()}
     writing = traj
     try:
-        write_trajectory(traj, t, quats, acc100, comment=f"{motion.name}, lead-in {lead_in} s")
+        write_trajectory(traj, t, quats, acc100, comment=f"{motion.name}, lead-in {lead_in} s",
+                         sensors=sensors)
         cmd = [str(mocapctl_path(require_onnx=False)), "synth", "--trajectory", str(traj), "--out",
                str(out), "--truth", str(sensor_truth), "--seed", str(int(seed)), "--world", world,
                "--noise", noise]
+        if sensors != DEFAULT_SENSORS:
+            cmd += ["--sensors", ",".join(f"{n}={node}" for n, node in zip(sensors, node_ids(sensors)))]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise CommandError("mocapctl synth failed: " + (r.stderr.strip() or f"status {r.returncode}"))
@@ -249,7 +262,7 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
                  fps=np.float64(full.fps), joint_names=np.array(sk.JOINT_NAMES),
                  parents=np.array(sk.PARENTS), motion_start=np.int64(n_lead),
                  t_session_start=np.float64(t_motion), prelude_s=np.float64(t_motion - t_first),
-                 clip=str(motion.name), world=world, seed=np.int64(seed))
+                 clip=str(motion.name), world=world, seed=np.int64(seed), sensors=np.array(sensors))
         writing = truth_csv
         write_truth_csv(truth_csv, full.local_rot, full.root_pos, full.fps, t_motion, n_lead)
     except OSError as e:
@@ -289,6 +302,9 @@ def add_arguments(p=None):
     p.add_argument("--lead-in", type=LEAD_IN, default=1.0,
                    help=f"seconds of T-pose -> clip blend (0 to {MAX_LEAD_IN_S:g})")
     p.add_argument("--keep-trajectory", action="store_true", help="keep CAPTURE.trajectory.txt")
+    p.add_argument("--sensors", default=",".join(DEFAULT_SENSORS),
+                   help="the capture's segments, comma-separated (default: the engine's default "
+                        "set); segments without a default node get the lowest free node ids")
     return p
 
 
@@ -297,7 +313,8 @@ def main(args=None):
         args = add_arguments().parse_args(args)
     info = synth_capture(args.bvh, args.out, args.truth, args.sensor_truth, args.seed, args.world,
                          args.noise, args.lead_in, args.keep_trajectory,
-                         truth_csv=getattr(args, "truth_csv", None))
+                         truth_csv=getattr(args, "truth_csv", None),
+                         sensors=getattr(args, "sensors", None) or TRAJECTORY_SENSORS)
     print(info["mocapctl"])
     print(f"synth-capture: {info['capture']} ({info['frames']} truth frames, clip from frame "
           f"{info['motion_start']}, truth frame 0 at session t={info['t_session_start']:.3f} s "

@@ -175,3 +175,22 @@ def test_the_shipped_models_metadata_is_what_export_writes_for_the_default_six()
     meta = dict(want)
     assert meta["mocap.contract_version"] == "1"
     assert meta["mocap.sensor_order"] == "pelvis,left_wrist,right_wrist,left_shin,right_shin,head"
+
+
+def test_the_contract_pages_segment_table_is_the_engines():
+    """docs/model-contract.md lists the segment table for model authors: it must say what
+    segments.def says (name, joint, default index), row for row."""
+    import re
+    page = (Path(__file__).resolve().parents[2] / "docs" / "model-contract.md").read_text()
+    section = page.split("## Segments", 1)[1].split("\n## ", 1)[0]
+    rows = re.findall(r"^\| (\w+) \| (\d+) \w+[^|]*\| (yes \(index \d+\)|yes \(\d+\)|no) \|$", section, re.M)
+    listed = [(name, int(joint), -1 if flag == "no" else int(re.search(r"\d+", flag).group()))
+              for name, joint, flag in rows]
+    default_index = {n: i for i, n in enumerate(se.DEFAULT_SENSORS)}
+    assert listed == [(s.name, s.joint, default_index.get(s.name, -1)) for s in se.SEGMENTS]
+
+
+def test_node_ids_keep_default_nodes_and_give_others_the_lowest_free_ones():
+    assert se.node_ids() == [0, 1, 2, 3, 4, 5]
+    assert se.node_ids(WITH_CHEST) == [0, 1, 2, 3, 4, 5, 6]
+    assert se.node_ids(("chest", "head", "pelvis")) == [1, 5, 0]

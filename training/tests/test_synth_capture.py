@@ -9,6 +9,7 @@ import pytest
 from training import bvh, ort, procedural, retarget
 from training import skeleton as sk
 from training import synth_capture as sc
+from training.errors import UsageError
 
 
 def test_trajectory_resampling_keeps_the_signal():
@@ -51,6 +52,39 @@ def test_procedural_bvh_capture_replays_with_small_error(tmp_path):
     assert worst < 1.5, r.stdout
     calibrated = int(re.search(r"(\d+) calibrated", r.stdout).group(1))
     assert calibrated >= 0.9 * truth["local_rot"].shape[0], r.stdout
+
+
+def test_a_capture_with_a_chest_sensor_replays_with_the_chest_calibrated(tmp_path):
+    """--sensors: the trajectory names its segments, mocapctl synth writes the seventh node, and
+    the engine's replay calibrates the chest and matches the generator's truth."""
+    clip_path = tmp_path / "clip.bvh"
+    bvh.write_bvh(clip_path, procedural.motion_to_daz(procedural.make_motion("mixed", 2.0, seed=5)))
+    cap = tmp_path / "clip.cap"
+    seven = "pelvis,left_wrist,right_wrist,left_shin,right_shin,head,chest"
+    assert sc.main([str(clip_path), "--out", str(cap), "--seed", "7", "--sensors", seven,
+                    "--keep-trajectory"]) == 0
+    lines = (tmp_path / "clip.trajectory.txt").read_text().splitlines()
+    assert "segments " + seven.replace(",", " ") in lines
+    assert list(sc.load_truth(tmp_path / "clip.truth.npz")["sensors"]) == seven.split(",")
+    r = subprocess.run([str(ort.mocapctl_path(require_onnx=False)), "replay", str(cap), "--truth",
+                        str(tmp_path / "clip.sensors.csv"), "--sensors",
+                        "pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=6"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.count("accepted") == 2, r.stdout
+    chest = re.search(r"^\s*chest\s+6\s+[\d.]+%\s+\d+\s+\d+\s+([\d.]+)", r.stdout, re.M)
+    assert chest and float(chest.group(1)) < 1.5, r.stdout
+    worst = float(re.search(r"worst sensor mean ([\d.]+) deg", r.stdout).group(1))
+    assert worst < 1.5, r.stdout
+
+
+def test_sensors_option_refuses_unknown_and_repeated_segments(tmp_path, capsys):
+    clip_path = tmp_path / "clip.bvh"
+    bvh.write_bvh(clip_path, procedural.motion_to_daz(procedural.make_motion("walk", 1.0, seed=1)))
+    for bad, message in (("pelvis,tail", "unknown segment 'tail'"), ("pelvis,head,head", "head listed more than once")):
+        with pytest.raises(UsageError, match=message):
+            sc.synth_capture(clip_path, tmp_path / "c.cap", sensors=bad)
+    assert not list(tmp_path.glob("c.*"))
 
 
 def test_truth_path_without_npz_suffix_is_the_file_written(tmp_path, monkeypatch):
