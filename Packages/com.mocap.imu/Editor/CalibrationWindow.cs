@@ -147,7 +147,7 @@ namespace Mocap.Imu.Editor
             {
                 using (new EditorGUILayout.VerticalScope(EditorStyles.helpBox))
                 {
-                    var label = $"{CalibrationQuality.SensorName(sensor.Segment)}: {(sensor.IsOk ? "OK" : "refused")}";
+                    var label = $"{CalibrationQuality.SensorName(sensor.Segment)}: {(sensor.IsLeftOut ? "left out (optional)" : sensor.IsOk ? "OK" : "refused")}";
                     EditorGUI.ProgressBar(EditorGUILayout.GetControlRect(false, 16), sensor.Stillness, $"{label}  (stillness {sensor.Stillness:P0})");
                     EditorGUILayout.LabelField(sensor.Text, EditorStyles.miniLabel);
                     if (sensor.Problems.Count > 0)
@@ -164,9 +164,11 @@ namespace Mocap.Imu.Editor
             {
                 var calibration = session.Calibration;
                 EditorGUILayout.Space();
-                EditorGUILayout.LabelField("Calibration in use", calibration.IsComplete ? "complete (all six sensors)"
-                    : $"heading mask 0x{calibration.HeadingMask:X2}, complete mask 0x{calibration.ValidMask:X2}");
-                using (new EditorGUI.DisabledScope(!calibration.IsComplete))
+                EditorGUILayout.LabelField("Calibration in use", calibration.IsComplete
+                    ? $"complete (all {calibration.SensorCount} sensors)"
+                    : $"{Calibrated(calibration)} (heading mask 0x{calibration.HeadingMask:X4})");
+                // An optional sensor left out leaves the calibration incomplete but usable.
+                using (new EditorGUI.DisabledScope(calibration.ValidMask == 0))
                 {
                     if (GUILayout.Button("Save Calibration..."))
                     {
@@ -180,6 +182,19 @@ namespace Mocap.Imu.Editor
             {
                 EditorGUILayout.HelpBox(e.Message, MessageType.Warning);
             }
+        }
+
+        // "5 of 7 sensors calibrated; not: chest, head".
+        static string Calibrated(in CalibrationData calibration)
+        {
+            int done = 0;
+            var missing = new System.Text.StringBuilder();
+            for (int i = 0; i < calibration.SensorCount; i++)
+            {
+                if ((calibration.ValidMask & (1u << i)) != 0) done++;
+                else missing.Append(missing.Length == 0 ? "; not: " : ", ").Append(CalibrationQuality.SensorName(calibration.GetSegment(i)));
+            }
+            return $"{done} of {calibration.SensorCount} sensors calibrated{missing}";
         }
     }
 }

@@ -150,14 +150,15 @@ namespace Mocap.Imu.Editor
                 {
                     var stats = session.GetStats();
                     EditorGUILayout.LabelField("Frames", $"{stats.FramesEmitted} ({stats.FramesDropped} dropped)");
-                    EditorGUILayout.LabelField("Sensors seen", SensorMask(stats.SensorsSeenMask));
+                    EditorGUILayout.LabelField("Sensors seen", SensorMask(stats.SensorsSeenMask, session.SensorCount, session.SegmentOf));
                     var lastError = stats.LastError;
                     if (!string.IsNullOrEmpty(lastError)) EditorGUILayout.HelpBox(lastError, MessageType.Warning);
                     if (stats.ReplayChunksSkipped > 0 || stats.ReplayTailDamaged)
                         EditorGUILayout.HelpBox(stats.ReplayDamage, MessageType.Warning);
                     var calibration = session.Calibration;
                     EditorGUILayout.LabelField("Calibration", calibration.IsComplete ? "complete"
-                        : $"heading {SensorMask(calibration.HeadingMask)}, T-pose {SensorMask(calibration.ValidMask)}");
+                        : $"heading {SensorMask(calibration.HeadingMask, calibration.SensorCount, calibration.GetSegment)}, " +
+                          $"T-pose {SensorMask(calibration.ValidMask, calibration.SensorCount, calibration.GetSegment)}");
                 }
                 catch (Exception e) when (e is MocapException || e is InvalidOperationException || e is ObjectDisposedException)
                 {
@@ -168,11 +169,17 @@ namespace Mocap.Imu.Editor
             }
         }
 
-        static string SensorMask(uint mask)
+        // "6/7, not chest": how many of the sensors have their bit, naming the ones that do not.
+        static string SensorMask(uint mask, int count, Func<int, MocapSegment> segmentOf)
         {
             int n = 0;
-            for (int s = 0; s < MocapSession.SensorCount; s++) if ((mask & (1u << s)) != 0) n++;
-            return $"{n}/{MocapSession.SensorCount}";
+            var missing = new System.Text.StringBuilder();
+            for (int s = 0; s < count; s++)
+            {
+                if ((mask & (1u << s)) != 0) n++;
+                else missing.Append(missing.Length == 0 ? ", not " : " ").Append(CalibrationQuality.SensorName(segmentOf(s)));
+            }
+            return $"{n}/{count}{missing}";
         }
 
         static void DrawRecordButtons(Component component, int character)

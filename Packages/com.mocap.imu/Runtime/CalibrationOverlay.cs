@@ -63,7 +63,7 @@ namespace Mocap.Imu
         string _title, _titleName, _collecting, _recording, _recordingPath;
         int _collectingPercent = -1;
         // Title, session or step, instruction, progress, one line per sensor.
-        readonly PanelText _worldLines = new PanelText(4 + MocapSession.SensorCount);
+        readonly PanelText _worldLines = new PanelText(4 + MocapSession.MaxSensors);
         TextMesh _worldText;
         // What the TextMesh shows: its text getter makes a new string on every call.
         string _worldTextShown;
@@ -163,11 +163,15 @@ namespace Mocap.Imu
             // Per sensor: stillness (gyro RMS) and orientation spread over the window.
             if (hasReport && report.State != CalibrationState.Idle)
             {
-                for (int s = 0; s < MocapSession.SensorCount; s++)
+                for (int s = 0; s < report.SensorCount; s++)
                 {
                     var color = GUI.color;
-                    if (report.IsFinished) GUI.color = report.GetSensor((MocapSegment)s).IsOk ? Color.green : Color.red;
-                    GUILayout.Label(_sensorLines.GetLine(report, (MocapSegment)s));
+                    if (report.IsFinished)
+                    {
+                        var quality = report.GetSensor(s);
+                        GUI.color = quality.IsLeftOut ? Color.yellow : quality.IsOk ? Color.green : Color.red;
+                    }
+                    GUILayout.Label(_sensorLines.GetLine(report, s));
                     GUI.color = color;
                 }
             }
@@ -232,8 +236,8 @@ namespace Mocap.Imu
                 _worldLines.Add(flow.Instruction);
                 if (flow.Phase == CalibrationFlowPhase.Collecting) _worldLines.Add(Collecting(flow.Progress));
                 if (flow.TryGetReport(out var report) && report.State != CalibrationState.Idle)
-                    for (int s = 0; s < MocapSession.SensorCount; s++)
-                        _worldLines.Add(_sensorLines.GetLine(report, (MocapSegment)s));
+                    for (int s = 0; s < report.SensorCount; s++)
+                        _worldLines.Add(_sensorLines.GetLine(report, s));
             }
             var text = _worldLines.Text;
             if (!ReferenceEquals(text, _worldTextShown)) _worldText.text = _worldTextShown = text;

@@ -5,9 +5,35 @@ using UnityEngine;
 
 namespace Mocap.Imu
 {
+    /// <summary>One sensor of a character: the body segment it is strapped to and its node id.</summary>
+    [Serializable]
+    public sealed class MocapSensorSlot
+    {
+        [Tooltip("The body segment the sensor is strapped to (each segment at most once per character).")]
+        public MocapSegment segment;
+
+        [Tooltip("The sensor's HiPNUC node id, 0..255 (each node id at most once per character).")]
+        public int nodeId;
+
+        [Tooltip("The sensor may be missing: calibration leaves it out instead of refusing. Sensors the pose model marks as optional are treated so anyway.")]
+        public bool optional;
+
+        public MocapSensorSlot() { }
+
+        public MocapSensorSlot(MocapSegment segment, int nodeId, bool optional = false)
+        {
+            this.segment = segment;
+            this.nodeId = nodeId;
+            this.optional = optional;
+        }
+
+        /// <summary>The engine's view of this slot.</summary>
+        public SessionSensor ToSessionSensor() => new SessionSensor(segment, nodeId, optional);
+    }
+
     /// <summary>Where one character's sensor data comes from.</summary>
     [Serializable]
-    public sealed class MocapCharacterSource
+    public sealed class MocapCharacterSource : ISerializationCallbackReceiver
     {
         [Tooltip("Shown in the inspector, the overlay and logs.")]
         public string name = "Performer";
@@ -48,8 +74,13 @@ namespace Mocap.Imu
         [Tooltip("Playback: length of the T-pose window, seconds.")]
         public float playbackTPoseSeconds = 2f;
 
-        [Tooltip("Node id of the sensor on each body segment: pelvis, left wrist, right wrist, left shin, right shin, head (-1 = none).")]
-        public int[] nodeIds = { 0, 1, 2, 3, 4, 5 };
+        [Tooltip("The character's sensors (1 to 16): the body segment each is strapped to and its node id. " +
+                 "The default is the six pelvis, wrists, shins and head on nodes 0..5; add chest for a model that uses it.")]
+        public List<MocapSensorSlot> sensors = DefaultSensors();
+
+        // Settings saved before sensor sets kept one node id per segment of the six (-1 = none);
+        // read once into sensors on load, then emptied.
+        [SerializeField, HideInInspector] int[] nodeIds;
 
         [Tooltip("Optional calibration file loaded at start (skips the calibration steps).")]
         public string calibrationFile = "";
@@ -78,12 +109,38 @@ namespace Mocap.Imu
                     config = SessionConfig.Serial(port, baud);
                     break;
             }
-            if (nodeIds != null && nodeIds.Length == MocapSession.SensorCount)
-                for (int s = 0; s < MocapSession.SensorCount; s++) config.NodeIds[s] = nodeIds[s];
+            if (sensors == null || sensors.Count == 0)
+                throw new ArgumentException($"character '{name}' has no sensors: add at least one to its sensor list");
+            config.Sensors.Clear();
+            foreach (var slot in sensors)
+                if (slot != null) config.Sensors.Add(slot.ToSessionSensor());
             config.AutoReconnect = autoReconnect && source != MocapSourceKind.Replay;
             if (outputRateHz > 0f) config.OutputRateHz = outputRateHz;
             config.CapturePath = capturePath ?? string.Empty;
             return config;
+        }
+
+        /// <summary>The six pelvis, wrists, shins and head on nodes 0..5 (the engine's default set).</summary>
+        public static List<MocapSensorSlot> DefaultSensors()
+        {
+            var list = new List<MocapSensorSlot>();
+            foreach (var sensor in SensorSets.DefaultSix()) list.Add(new MocapSensorSlot(sensor.Segment, sensor.NodeId));
+            return list;
+        }
+
+        void ISerializationCallbackReceiver.OnBeforeSerialize() { }
+
+        void ISerializationCallbackReceiver.OnAfterDeserialize()
+        {
+            // An asset saved before sensor sets: its six node ids become the sensor list.
+            if (nodeIds == null || nodeIds.Length == 0) return;
+            if (nodeIds.Length == 6)
+            {
+                sensors = new List<MocapSensorSlot>();
+                foreach (var sensor in SensorSets.FromNodeIdsOfTheSix(nodeIds))
+                    sensors.Add(new MocapSensorSlot(sensor.Segment, sensor.NodeId));
+            }
+            nodeIds = null;
         }
 
         /// <summary>This source as one character of a runner's plan. Main thread (paths resolve through Application).</summary>
@@ -137,7 +194,7 @@ namespace Mocap.Imu
         [Min(0f)] public float smoothingBeta = 6f;
 
         [Header("Characters (one sensor set each)")]
-        [Tooltip("One entry per performer: each has its own six sensors and drives its own avatar.")]
+        [Tooltip("One entry per performer: each has its own sensor set and drives its own avatar.")]
         public List<MocapCharacterSource> characters = new List<MocapCharacterSource> { new MocapCharacterSource() };
 
         [Header("Raw capture recording")]

@@ -147,3 +147,12 @@ namespace UnityEngine
         public RuntimeInitializeLoadType loadType { get => throw null; }
     }
 }
+
+namespace UnityEngine
+{
+    public partial interface ISerializationCallbackReceiver
+    {
+        void OnBeforeSerialize();
+        void OnAfterDeserialize();
+    }
+}

@@ -51,9 +51,15 @@ namespace Mocap.Imu
         /// <summary>Frames with a fresh sample in the window.</summary>
         [NativeName("samples")] public uint Samples;
         [NativeName("ok")] int _ok;
+        /// <summary>The segment the sensor rides on.</summary>
+        [NativeName("segment")] public MocapSegment Segment;
+        [NativeName("left_out")] int _leftOut;
 
         /// <summary>The sensor passed every check.</summary>
         public bool IsOk => _ok != 0;
+
+        /// <summary>An optional sensor that sent nothing: left uncalibrated instead of refusing the step.</summary>
+        public bool IsLeftOut => _leftOut != 0;
     }
 
     /// <summary>State and quality of a calibration step (mocap_calibration_report).</summary>
@@ -66,20 +72,46 @@ namespace Mocap.Imu
         /// <summary>0..1 through the collection window.</summary>
         [NativeName("progress")] public float Progress;
         [NativeName("seconds_remaining")] public float SecondsRemaining;
-        // C: mocap_sensor_quality sensors[6], mirrored as six consecutive fields.
-        [NativeName("sensors", Count = MocapSession.SensorCount)] SensorQuality _sensor0;
-        SensorQuality _sensor1, _sensor2, _sensor3, _sensor4, _sensor5;
+        [NativeName("sensor_count")] uint _sensorCount;
+        // C: mocap_sensor_quality sensors[16], mirrored as a fixed buffer of the same size.
+        [NativeName("sensors")] fixed uint _sensors[MocapSession.MaxSensors * SensorQualityWords];
         [NativeName("reason")] fixed byte _reason[256];
+
+        // sizeof(mocap_sensor_quality) / 4; the layout test checks the buffer against the engine.
+        const int SensorQualityWords = 8;
 
         /// <summary>The step has a result (accepted or refused).</summary>
         public bool IsFinished => State == CalibrationState.Accepted || State == CalibrationState.Refused;
 
-        /// <summary>Quality of one sensor.</summary>
-        public SensorQuality GetSensor(MocapSegment segment)
+        /// <summary>The session's sensors, in its config order.</summary>
+        public int SensorCount => (int)Math.Min(_sensorCount, (uint)MocapSession.MaxSensors);
+
+        /// <summary>Quality of sensor <paramref name="index"/> (0 .. <see cref="SensorCount"/>-1).</summary>
+        public SensorQuality GetSensor(int index)
         {
-            if ((uint)segment >= MocapSession.SensorCount)
-                throw new ArgumentOutOfRangeException(nameof(segment));
-            fixed (SensorQuality* first = &_sensor0) return first[(int)segment];
+            if ((uint)index >= (uint)SensorCount)
+                throw new ArgumentOutOfRangeException(nameof(index), index, $"the report has {SensorCount} sensors");
+            fixed (uint* words = _sensors) return ((SensorQuality*)words)[index];
+        }
+
+        /// <summary>The index of the sensor on <paramref name="segment"/>, or -1 when the session has none.</summary>
+        public int IndexOf(MocapSegment segment)
+        {
+            fixed (uint* words = _sensors)
+            {
+                var sensors = (SensorQuality*)words;
+                for (int i = 0; i < SensorCount; i++)
+                    if (sensors[i].Segment == segment) return i;
+            }
+            return -1;
+        }
+
+        /// <summary>Quality of the sensor on <paramref name="segment"/>, when the session has one.</summary>
+        public bool TryGetSensor(MocapSegment segment, out SensorQuality quality)
+        {
+            int index = IndexOf(segment);
+            quality = index >= 0 ? GetSensor(index) : default;
+            return index >= 0;
         }
 
         /// <summary>Why the step was refused, naming the sensor(s); "" otherwise. Allocates.</summary>
@@ -101,57 +133,110 @@ namespace Mocap.Imu
     [StructLayout(LayoutKind.Sequential)]
     public unsafe struct CalibrationData
     {
-        const int Count = MocapSession.SensorCount;
+        const int Max = MocapSession.MaxSensors;
 
         [NativeName("struct_size")] uint _structSize;
-        /// <summary>Bit s: heading and T-pose both done for segment s.</summary>
+        [NativeName("sensor_count")] uint _sensorCount;
+        /// <summary>Bit i: heading and T-pose both done for entry i.</summary>
         [NativeName("valid_mask")] public uint ValidMask;
-        /// <summary>Bit s: heading done for segment s.</summary>
+        /// <summary>Bit i: heading done for entry i.</summary>
         [NativeName("heading_mask")] public uint HeadingMask;
-        [NativeName("reserved")] uint _reserved;
-        [NativeName("world_to_model")] fixed float _worldToModel[Count * 9];
-        [NativeName("sensor_to_bone")] fixed float _sensorToBone[Count * 9];
-        [NativeName("acceleration_offset")] fixed float _accelerationOffset[Count * 3];
+        [NativeName("segments")] fixed int _segments[Max];
+        [NativeName("world_to_model")] fixed float _worldToModel[Max * 9];
+        [NativeName("sensor_to_bone")] fixed float _sensorToBone[Max * 9];
+        [NativeName("acceleration_offset")] fixed float _accelerationOffset[Max * 3];
 
-        /// <summary>Every segment has a complete calibration.</summary>
-        public bool IsComplete => (ValidMask & 0x3Fu) == 0x3Fu;
+        /// <summary>
+        /// Entries, one per sensor (config order of the session it came from). Applied to a
+        /// session, each entry goes to the session's sensor on the same segment.
+        /// </summary>
+        public int SensorCount => (int)Math.Min(_sensorCount, (uint)Max);
 
-        /// <summary>Heading and T-pose are both done for a segment.</summary>
-        public bool IsValid(MocapSegment segment) => (ValidMask & (1u << (int)segment)) != 0;
+        /// <summary>The segment of entry <paramref name="index"/>.</summary>
+        public MocapSegment GetSegment(int index) => (MocapSegment)_segments[Entry(index)];
 
-        /// <summary>Sensor world to model frame (a yaw about up, then Z-up to Y-up).</summary>
-        public MocapMatrix3x3 GetWorldToModel(MocapSegment segment)
+        /// <summary>The entry of <paramref name="segment"/>, or -1 when this calibration has none.</summary>
+        public int IndexOf(MocapSegment segment)
         {
-            fixed (float* m = _worldToModel) return ReadMatrix(m, segment);
+            for (int i = 0; i < SensorCount; i++)
+                if (_segments[i] == (int)segment) return i;
+            return -1;
         }
 
-        public void SetWorldToModel(MocapSegment segment, in MocapMatrix3x3 value)
+        /// <summary>
+        /// Append an uncalibrated entry for <paramref name="segment"/> (building a calibration by
+        /// hand); returns its index.
+        /// </summary>
+        public int AddSensor(MocapSegment segment)
         {
-            fixed (float* m = _worldToModel) WriteMatrix(m, segment, value);
+            if (IndexOf(segment) >= 0)
+                throw new ArgumentException($"the calibration already has an entry for {SegmentTable.SnakeName(segment)}", nameof(segment));
+            if (SensorCount >= Max)
+                throw new InvalidOperationException($"a calibration holds at most {Max} sensors");
+            int index = SensorCount;
+            _segments[index] = (int)segment;
+            _sensorCount = (uint)(index + 1);
+            return index;
         }
 
-        /// <summary>Sensor frame to bone frame (the mounting rotation).</summary>
-        public MocapMatrix3x3 GetSensorToBone(MocapSegment segment)
+        /// <summary>Every entry has heading and T-pose (and there is at least one).</summary>
+        public bool IsComplete
         {
-            fixed (float* m = _sensorToBone) return ReadMatrix(m, segment);
+            get
+            {
+                int n = SensorCount;
+                uint all = n >= 32 ? uint.MaxValue : (1u << n) - 1u;
+                return n > 0 && (ValidMask & all) == all;
+            }
         }
 
-        public void SetSensorToBone(MocapSegment segment, in MocapMatrix3x3 value)
+        /// <summary>Heading and T-pose are both done for the sensor on a segment (false when it has no entry).</summary>
+        public bool IsValid(MocapSegment segment)
         {
-            fixed (float* m = _sensorToBone) WriteMatrix(m, segment, value);
+            int i = IndexOf(segment);
+            return i >= 0 && (ValidMask & (1u << i)) != 0;
         }
 
-        /// <summary>Model-frame specific force at the T-pose (gravity plus bias), m/s^2.</summary>
-        public MocapVector3 GetAccelerationOffset(MocapSegment segment)
+        /// <summary>Sensor world to model frame (a yaw about up, then Z-up to Y-up) of entry <paramref name="index"/>.</summary>
+        public MocapMatrix3x3 GetWorldToModel(int index)
         {
-            int s = Index(segment);
-            fixed (float* v = _accelerationOffset) return *(MocapVector3*)(v + s * 3);
+            fixed (float* m = _worldToModel) return *(MocapMatrix3x3*)(m + Entry(index) * 9);
         }
 
-        public void SetAccelerationOffset(MocapSegment segment, MocapVector3 value)
+        public void SetWorldToModel(int index, in MocapMatrix3x3 value)
         {
-            int s = Index(segment);
-            fixed (float* v = _accelerationOffset) *(MocapVector3*)(v + s * 3) = value;
+            fixed (float* m = _worldToModel) *(MocapMatrix3x3*)(m + Entry(index) * 9) = value;
+        }
+
+        /// <summary>Sensor frame to bone frame (the mounting rotation) of entry <paramref name="index"/>.</summary>
+        public MocapMatrix3x3 GetSensorToBone(int index)
+        {
+            fixed (float* m = _sensorToBone) return *(MocapMatrix3x3*)(m + Entry(index) * 9);
+        }
+
+        public void SetSensorToBone(int index, in MocapMatrix3x3 value)
+        {
+            fixed (float* m = _sensorToBone) *(MocapMatrix3x3*)(m + Entry(index) * 9) = value;
+        }
+
+        /// <summary>Model-frame specific force at the T-pose (gravity plus bias), m/s^2, of entry <paramref name="index"/>.</summary>
+        public MocapVector3 GetAccelerationOffset(int index)
+        {
+            fixed (float* v = _accelerationOffset) return *(MocapVector3*)(v + Entry(index) * 3);
+        }
+
+        public void SetAccelerationOffset(int index, MocapVector3 value)
+        {
+            fixed (float* v = _accelerationOffset) *(MocapVector3*)(v + Entry(index) * 3) = value;
+        }
+
+        /// <summary>The entry of <paramref name="segment"/>; throws naming it when there is none.</summary>
+        public int EntryOf(MocapSegment segment)
+        {
+            int i = IndexOf(segment);
+            if (i < 0)
+                throw new ArgumentException($"the calibration has no entry for {SegmentTable.SnakeName(segment)}", nameof(segment));
+            return i;
         }
 
         /// <summary>
@@ -193,17 +278,12 @@ namespace Mocap.Imu
             return copy;
         }
 
-        static int Index(MocapSegment segment)
+        int Entry(int index)
         {
-            if ((uint)segment >= Count) throw new ArgumentOutOfRangeException(nameof(segment));
-            return (int)segment;
+            if ((uint)index >= (uint)SensorCount)
+                throw new ArgumentOutOfRangeException(nameof(index), index, $"the calibration has {SensorCount} entries");
+            return index;
         }
-
-        static MocapMatrix3x3 ReadMatrix(float* matrices, MocapSegment segment) =>
-            *(MocapMatrix3x3*)(matrices + Index(segment) * 9);
-
-        static void WriteMatrix(float* matrices, MocapSegment segment, in MocapMatrix3x3 value) =>
-            *(MocapMatrix3x3*)(matrices + Index(segment) * 9) = value;
     }
 
     /// <summary>Which calibrations survive when a set of sessions is opened again.</summary>

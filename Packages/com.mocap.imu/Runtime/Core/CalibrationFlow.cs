@@ -271,7 +271,7 @@ namespace Mocap.Imu
 
         static string Pose(CalibrationStep step) => step switch
         {
-            CalibrationStep.Heading => "Lay all six sensors flat and still on a table, X axes pointing the way you will face.",
+            CalibrationStep.Heading => "Lay all the sensors flat and still on a table, X axes pointing the way you will face.",
             CalibrationStep.TPose => "Stand in a T-pose facing forward: arms straight out, palms down, feet together.",
             _ => "Stand still and upright, facing forward (T-pose or arms down).",
         };

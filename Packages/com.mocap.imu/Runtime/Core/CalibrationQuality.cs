@@ -52,6 +52,8 @@ namespace Mocap.Imu
         public IReadOnlyList<string> Problems { get; }
         /// <summary>The engine accepted this sensor.</summary>
         public bool IsOk => Quality.IsOk;
+        /// <summary>An optional sensor that sent nothing, left uncalibrated (not a refusal).</summary>
+        public bool IsLeftOut => Quality.IsLeftOut;
     }
 
     /// <summary>Turns calibration reports into per-sensor summaries.</summary>
@@ -60,16 +62,7 @@ namespace Mocap.Imu
         static readonly CultureInfo Invariant = CultureInfo.InvariantCulture;
 
         /// <summary>The sensor's display name ("left wrist").</summary>
-        public static string SensorName(MocapSegment segment) => segment switch
-        {
-            MocapSegment.Pelvis => "pelvis",
-            MocapSegment.LeftWrist => "left wrist",
-            MocapSegment.RightWrist => "right wrist",
-            MocapSegment.LeftShin => "left shin",
-            MocapSegment.RightShin => "right shin",
-            MocapSegment.Head => "head",
-            _ => segment.ToString(),
-        };
+        public static string SensorName(MocapSegment segment) => SegmentTable.DisplayName(segment);
 
         /// <summary>0..1 stillness of a sensor (see <see cref="SensorQualitySummary.Stillness"/>).</summary>
         public static float Stillness(in SensorQuality quality)
@@ -81,12 +74,15 @@ namespace Mocap.Imu
             return worst >= 1f ? 0f : 1f - worst;
         }
 
-        /// <summary>Summaries of the six sensors of a report, in segment order.</summary>
+        /// <summary>Summaries of every sensor of a report, in the session's sensor order.</summary>
         public static SensorQualitySummary[] Summarize(in CalibrationReport report)
         {
-            var result = new SensorQualitySummary[MocapSession.SensorCount];
+            var result = new SensorQualitySummary[report.SensorCount];
             for (int s = 0; s < result.Length; s++)
-                result[s] = Summarize(report.Step, (MocapSegment)s, report.GetSensor((MocapSegment)s));
+            {
+                var quality = report.GetSensor(s);
+                result[s] = Summarize(report.Step, quality.Segment, quality);
+            }
             return result;
         }
 
@@ -95,7 +91,9 @@ namespace Mocap.Imu
         {
             var problems = new List<string>();
             var text = new List<string>();
-            if (q.Samples == 0)
+            if (q.IsLeftOut)
+                text.Add("left out: optional and sent nothing");
+            else if (q.Samples == 0)
             {
                 problems.Add("no samples");
                 text.Add("no samples");
@@ -124,7 +122,7 @@ namespace Mocap.Imu
             }
             // The engine also refuses for checks it does not report as numbers (too few fresh
             // samples, T-pose without heading): say so rather than show a failing sensor as fine.
-            if (!q.IsOk && problems.Count == 0) problems.Add("refused by the engine (see the reason)");
+            if (!q.IsOk && !q.IsLeftOut && problems.Count == 0) problems.Add("refused by the engine (see the reason)");
             return new SensorQualitySummary(segment, q, Stillness(q), string.Join(", ", text), problems);
         }
 
@@ -148,34 +146,46 @@ namespace Mocap.Imu
         struct Shown
         {
             public string Line;
+            public MocapSegment Segment;
             public CalibrationStep Step;
             public bool Finished;
             public SensorQuality Quality;
         }
 
-        readonly Shown[] _shown = new Shown[MocapSession.SensorCount];
+        readonly Shown[] _shown = new Shown[MocapSession.MaxSensors];
 
-        /// <summary>The line for one sensor of <paramref name="report"/>.</summary>
-        public string GetLine(in CalibrationReport report, MocapSegment segment)
+        /// <summary>The line for sensor <paramref name="index"/> (the session's order) of <paramref name="report"/>.</summary>
+        public string GetLine(in CalibrationReport report, int index)
         {
-            var quality = report.GetSensor(segment);       // checks the range
-            ref var shown = ref _shown[(int)segment];
-            if (shown.Line != null && shown.Step == report.Step && shown.Finished == report.IsFinished
-                && SameNumbers(shown.Quality, quality))
+            var quality = report.GetSensor(index);       // checks the range
+            var segment = quality.Segment;
+            ref var shown = ref _shown[index];
+            if (shown.Line != null && shown.Segment == segment && shown.Step == report.Step
+                && shown.Finished == report.IsFinished && SameNumbers(shown.Quality, quality))
                 return shown.Line;
             var summary = CalibrationQuality.Summarize(report.Step, segment, quality);
-            string verdict = report.IsFinished ? (quality.IsOk ? ": ok" : ": REFUSED") : "";
+            string verdict = !report.IsFinished ? "" : quality.IsLeftOut ? ": left out" : quality.IsOk ? ": ok" : ": REFUSED";
             shown.Line = CalibrationQuality.SensorName(segment) + verdict + " - " + summary.Text;
+            shown.Segment = segment;
             shown.Step = report.Step;
             shown.Finished = report.IsFinished;
             shown.Quality = quality;
             return shown.Line;
         }
 
+        /// <summary>The line for the sensor on <paramref name="segment"/>; throws when the report has none.</summary>
+        public string GetLine(in CalibrationReport report, MocapSegment segment)
+        {
+            int index = report.IndexOf(segment);
+            if (index < 0)
+                throw new ArgumentException($"the report has no sensor on {CalibrationQuality.SensorName(segment)}", nameof(segment));
+            return GetLine(report, index);
+        }
+
         static bool SameNumbers(in SensorQuality a, in SensorQuality b) =>
             Same(a.GyroRmsDps, b.GyroRmsDps) && Same(a.OrientationSpreadDegrees, b.OrientationSpreadDegrees)
             && Same(a.AccelerationNormError, b.AccelerationNormError) && Same(a.TiltDegrees, b.TiltDegrees)
-            && a.Samples == b.Samples && a.IsOk == b.IsOk;
+            && a.Samples == b.Samples && a.IsOk == b.IsOk && a.IsLeftOut == b.IsLeftOut;
 
         // NaN (a sensor the engine could not measure) shows as NaN each time: equal for display.
         static bool Same(float a, float b) => a == b || (float.IsNaN(a) && float.IsNaN(b));

@@ -55,6 +55,23 @@ namespace Mocap.Imu
         }
     }
 
+    /// <summary>One input sensor of a pose model: the segment it rides on and whether the model needs it.</summary>
+    public readonly struct ModelSensor
+    {
+        public ModelSensor(MocapSegment segment, bool required)
+        {
+            Segment = segment;
+            Required = required;
+        }
+
+        /// <summary>The body segment.</summary>
+        public MocapSegment Segment { get; }
+        /// <summary>The model needs it; an optional one may be missing (masked out).</summary>
+        public bool Required { get; }
+
+        public override string ToString() => SegmentTable.SnakeName(Segment) + (Required ? "" : " (optional)");
+    }
+
     /// <summary>What a model's metadata says (mocap_model_info), validated by the engine at load.</summary>
     public sealed class ModelInfo
     {
@@ -67,6 +84,12 @@ namespace Mocap.Imu
             fixed (NativeModelInfo* n = &native)
             {
                 ContractVersion = n->ContractVersion;
+                int sensorCount = (int)Math.Min(n->SensorCount, (uint)MocapSession.MaxSensors);
+                var sensors = new ModelSensor[sensorCount];
+                for (int k = 0; k < sensorCount; k++)
+                    sensors[k] = new ModelSensor((MocapSegment)n->SensorSegments[k],
+                                                 (n->SensorRequiredMask & (1u << k)) != 0);
+                Sensors = sensors;
                 FrameRate = n->FrameRate;
                 StateLayers = n->StateLayers;
                 StateSize = n->StateSize;
@@ -85,8 +108,18 @@ namespace Mocap.Imu
             Skeleton = BuildSkeleton(names, parents, offsets);
         }
 
-        /// <summary>Model contract version (docs/model-contract.md).</summary>
+        /// <summary>Model contract version (docs/model-contract.md): 1 = the six fixed sensors, 2 = its own set with a mask.</summary>
         public int ContractVersion { get; }
+        /// <summary>The model's input sensors, in its input order.</summary>
+        public IReadOnlyList<ModelSensor> Sensors { get; }
+
+        /// <summary>The index of the model's sensor on <paramref name="segment"/>, or -1 when it has none.</summary>
+        public int IndexOf(MocapSegment segment)
+        {
+            for (int k = 0; k < Sensors.Count; k++)
+                if (Sensors[k].Segment == segment) return k;
+            return -1;
+        }
         /// <summary>Frames per second the model expects; sessions feeding it must output this rate.</summary>
         public float FrameRate { get; }
         /// <summary>Recurrent state layers.</summary>

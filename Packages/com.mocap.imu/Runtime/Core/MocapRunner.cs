@@ -274,6 +274,8 @@ namespace Mocap.Imu
                 {
                     var config = r.Configs[c];
                     config.OutputRateHz = rate; // sessions feeding the model run at its rate
+                    // A sensor the model can do without must not block calibration when absent.
+                    config.MarkModelOptionalSensors(engine.Model.Info);
                     var session = MocapSession.Open(config);
                     engine.Sessions[c] = session;
                     if (r.Calibrations[c] is CalibrationData calibration)

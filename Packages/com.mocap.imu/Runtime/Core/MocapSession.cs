@@ -14,7 +14,7 @@ namespace Mocap.Imu
     }
 
     /// <summary>
-    /// One set of six sensors: a serial port, a HID receiver or a capture replay, turned by the
+    /// One sensor set (up to <see cref="MaxSensors"/> sensors, one character): a serial port, a HID receiver or a capture replay, turned by the
     /// engine into synchronised, calibrated frames on its own threads.
     /// </summary>
     /// <remarks>
@@ -35,8 +35,8 @@ namespace Mocap.Imu
     /// </remarks>
     public sealed class MocapSession : IDisposable
     {
-        /// <summary>Sensors per session (MOCAP_SENSOR_COUNT).</summary>
-        public const int SensorCount = 6;
+        /// <summary>The most sensors one session carries (MOCAP_MAX_SENSORS).</summary>
+        public const int MaxSensors = 16;
 
         readonly SessionConfig _config;
         SessionHandle _handle;
@@ -65,6 +65,12 @@ namespace Mocap.Imu
 
         /// <summary>A copy of the configuration the session was opened with.</summary>
         public SessionConfig Config => _config.Clone();
+
+        /// <summary>The session's sensors (its config's sensor set); frames and reports list them in this order.</summary>
+        public int SensorCount => _config.Sensors.Count;
+
+        /// <summary>The segment of sensor <paramref name="index"/> (config order).</summary>
+        public MocapSegment SegmentOf(int index) => _config.Sensors[index].Segment;
 
         /// <summary>The engine threads are running.</summary>
         public bool IsRunning => _running;

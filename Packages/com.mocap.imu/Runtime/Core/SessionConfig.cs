@@ -1,7 +1,43 @@
 using System;
+using System.Collections.Generic;
 
 namespace Mocap.Imu
 {
+    /// <summary>One sensor of a session's sensor set: the segment it rides on and the HiPNUC node it sends as.</summary>
+    [Serializable]
+    public readonly struct SessionSensor : IEquatable<SessionSensor>
+    {
+        public SessionSensor(MocapSegment segment, int nodeId, bool optional = false)
+        {
+            Segment = segment;
+            NodeId = nodeId;
+            Optional = optional;
+        }
+
+        /// <summary>The body segment.</summary>
+        public MocapSegment Segment { get; }
+        /// <summary>The HiPNUC node id (0..255).</summary>
+        public int NodeId { get; }
+        /// <summary>
+        /// It may be missing: calibration leaves it out instead of refusing, and frames count as
+        /// calibrated without it. Set from the model's optional sensors by the runner.
+        /// </summary>
+        public bool Optional { get; }
+
+        /// <summary>The same sensor with another optional flag.</summary>
+        public SessionSensor WithOptional(bool optional) => new SessionSensor(Segment, NodeId, optional);
+
+        public bool Equals(SessionSensor other) =>
+            Segment == other.Segment && NodeId == other.NodeId && Optional == other.Optional;
+
+        public override bool Equals(object obj) => obj is SessionSensor other && Equals(other);
+
+        public override int GetHashCode() => ((int)Segment * 397) ^ (NodeId * 2) ^ (Optional ? 1 : 0);
+
+        public override string ToString() =>
+            $"{SegmentTable.SnakeName(Segment)}={NodeId}" + (Optional ? " (optional)" : "");
+    }
+
     /// <summary>Where a session's bytes come from (mocap_source_kind).</summary>
     public enum MocapSourceKind
     {
@@ -35,8 +71,8 @@ namespace Mocap.Imu
 
     /// <summary>
     /// Everything needed to open a <see cref="MocapSession"/>. A new instance holds the engine's
-    /// own defaults (read from the library, so there is one source of truth): 460800 baud, node
-    /// ids 0..5, 60 Hz output. Change what you need, or start from <see cref="Serial"/>,
+    /// own defaults (read from the library, so there is one source of truth): 460800 baud, the
+    /// default sensor set (six sensors, node ids 0..5), 60 Hz output. Change what you need, or start from <see cref="Serial"/>,
     /// <see cref="Hid"/> or <see cref="Replay"/>.
     /// </summary>
     public sealed class SessionConfig
@@ -51,8 +87,12 @@ namespace Mocap.Imu
         public ushort HidVendorId { get; set; }
         /// <summary>HID only, when <see cref="Path"/> is empty.</summary>
         public ushort HidProductId { get; set; }
-        /// <summary>Node id of the sensor on each <see cref="MocapSegment"/>; -1 = none. Length 6.</summary>
-        public int[] NodeIds { get; } = new int[MocapSession.SensorCount];
+        /// <summary>
+        /// The sensor set, 1 to <see cref="MocapSession.MaxSensors"/> sensors, each segment and
+        /// node id at most once. Frames, calibration reports and calibrations list the sensors in
+        /// this order. Defaults to the engine's default set.
+        /// </summary>
+        public List<SessionSensor> Sensors { get; } = new List<SessionSensor>();
         public MocapImusolLayout ImusolLayout { get; set; }
         public MocapWorldFrame WorldFrame { get; set; }
         /// <summary>Output frame rate, Hz.</summary>
@@ -115,9 +155,40 @@ namespace Mocap.Imu
             };
         }
 
+        /// <summary>Add a sensor to the set (the checks happen when the session opens).</summary>
+        public SessionConfig AddSensor(MocapSegment segment, int nodeId, bool optional = false)
+        {
+            Sensors.Add(new SessionSensor(segment, nodeId, optional));
+            return this;
+        }
+
+        /// <summary>The index of the sensor on <paramref name="segment"/> in <see cref="Sensors"/>, or -1.</summary>
+        public int IndexOf(MocapSegment segment)
+        {
+            for (int i = 0; i < Sensors.Count; i++)
+                if (Sensors[i].Segment == segment) return i;
+            return -1;
+        }
+
+        /// <summary>
+        /// Marks as optional each sensor <paramref name="model"/> does not require: one it lists
+        /// as optional, and one it does not read at all. Such a sensor being absent then does not
+        /// block calibration (as mocapctl does with a model). Sensors already optional stay so.
+        /// </summary>
+        public void MarkModelOptionalSensors(ModelInfo model)
+        {
+            if (model == null) throw new ArgumentNullException(nameof(model));
+            for (int i = 0; i < Sensors.Count; i++)
+            {
+                int k = model.IndexOf(Sensors[i].Segment);
+                bool required = k >= 0 && model.Sensors[k].Required;
+                if (!required && !Sensors[i].Optional) Sensors[i] = Sensors[i].WithOptional(true);
+            }
+        }
+
         /// <summary>
         /// Whether <paramref name="other"/> reads the same sensors: same source kind, port/path
-        /// (and HID ids) and node id per segment. Rates, filters, pacing and the capture path may
+        /// (and HID ids) and the same node id on each segment. Rates, filters, pacing and the capture path may
         /// differ: a calibration made for one applies to the other.
         /// </summary>
         public bool IsSameSource(SessionConfig other)
@@ -126,9 +197,13 @@ namespace Mocap.Imu
             if (!string.Equals(other.Path ?? string.Empty, Path ?? string.Empty, StringComparison.Ordinal)) return false;
             if (Source == MocapSourceKind.Hid && (other.HidVendorId != HidVendorId || other.HidProductId != HidProductId))
                 return false;
-            if (other.NodeIds.Length != NodeIds.Length) return false;
-            for (int s = 0; s < NodeIds.Length; s++)
-                if (other.NodeIds[s] != NodeIds[s]) return false;
+            // A calibration belongs to segments, not positions: the order may differ.
+            if (other.Sensors.Count != Sensors.Count) return false;
+            foreach (var sensor in Sensors)
+            {
+                int i = other.IndexOf(sensor.Segment);
+                if (i < 0 || other.Sensors[i].NodeId != sensor.NodeId) return false;
+            }
             return true;
         }
 
@@ -143,7 +218,7 @@ namespace Mocap.Imu
             Baud = other.Baud;
             HidVendorId = other.HidVendorId;
             HidProductId = other.HidProductId;
-            Array.Copy(other.NodeIds, NodeIds, NodeIds.Length);
+            Sensors.AddRange(other.Sensors);
             ImusolLayout = other.ImusolLayout;
             WorldFrame = other.WorldFrame;
             OutputRateHz = other.OutputRateHz;
@@ -158,13 +233,13 @@ namespace Mocap.Imu
         }
 
         /// <summary>
-        /// Fill the engine's struct. Range checks (rates, ids, speeds) are left to the engine,
-        /// whose messages say what is wrong; only what C# alone can get wrong is checked here.
+        /// Fill the engine's struct. Range checks (rates, node ids, speeds) are left to the engine,
+        /// whose messages say what is wrong; the sensor set is checked here, where the message
+        /// can name the sensors as the caller wrote them.
         /// </summary>
         internal unsafe void ToNative(out NativeSessionConfig native)
         {
-            if (NodeIds.Length != MocapSession.SensorCount)
-                throw new ArgumentException("NodeIds must have 6 entries", nameof(NodeIds));
+            CheckSensors();
             if (Baud < 0) throw new ArgumentOutOfRangeException(nameof(Baud), "baud must be positive");
             native = default;
             native.StructSize = (uint)sizeof(NativeSessionConfig);
@@ -174,8 +249,13 @@ namespace Mocap.Imu
             native.Baud = (uint)Baud;
             native.HidVendorId = HidVendorId;
             native.HidProductId = HidProductId;
-            fixed (int* ids = native.NodeIds)
-                for (int s = 0; s < MocapSession.SensorCount; s++) ids[s] = NodeIds[s];
+            native.SensorCount = (uint)Sensors.Count;
+            for (int i = 0; i < Sensors.Count; i++)
+            {
+                native.SensorSegments[i] = (int)Sensors[i].Segment;
+                native.NodeIds[i] = Sensors[i].NodeId;
+                if (Sensors[i].Optional) native.OptionalMask |= 1u << i;
+            }
             native.ImusolLayout = (int)ImusolLayout;
             native.WorldFrame = (int)WorldFrame;
             native.OutputRateHz = OutputRateHz;
@@ -197,8 +277,12 @@ namespace Mocap.Imu
             Baud = (int)native.Baud;
             HidVendorId = native.HidVendorId;
             HidProductId = native.HidProductId;
-            fixed (int* ids = native.NodeIds)
-                for (int s = 0; s < MocapSession.SensorCount; s++) NodeIds[s] = ids[s];
+            Sensors.Clear();
+            int count = (int)Math.Min(native.SensorCount, (uint)MocapSession.MaxSensors);
+            fixed (NativeSessionConfig* n = &native)
+                for (int i = 0; i < count; i++)
+                    Sensors.Add(new SessionSensor((MocapSegment)n->SensorSegments[i], n->NodeIds[i],
+                                                  (n->OptionalMask & (1u << i)) != 0));
             ImusolLayout = (MocapImusolLayout)native.ImusolLayout;
             WorldFrame = (MocapWorldFrame)native.WorldFrame;
             OutputRateHz = native.OutputRateHz;
@@ -211,6 +295,29 @@ namespace Mocap.Imu
             AutoReconnect = native.AutoReconnect != 0;
             fixed (byte* capture = native.CapturePath)
                 CapturePath = NativeText.FromBuffer(capture, NativeMethods.PathMax);
+        }
+
+        void CheckSensors()
+        {
+            if (Sensors.Count == 0)
+                throw new ArgumentException("the session has no sensors: add at least one to Sensors", nameof(Sensors));
+            if (Sensors.Count > MocapSession.MaxSensors)
+                throw new ArgumentException(
+                    $"the session has {Sensors.Count} sensors; the engine takes at most {MocapSession.MaxSensors}",
+                    nameof(Sensors));
+            for (int i = 0; i < Sensors.Count; i++)
+                for (int j = 0; j < i; j++)
+                {
+                    if (Sensors[j].Segment == Sensors[i].Segment)
+                        throw new ArgumentException(
+                            $"sensors {j} and {i} are both on {SegmentTable.SnakeName(Sensors[i].Segment)}: each segment at most once",
+                            nameof(Sensors));
+                    if (Sensors[j].NodeId == Sensors[i].NodeId)
+                        throw new ArgumentException(
+                            $"sensors {j} ({SegmentTable.SnakeName(Sensors[j].Segment)}) and {i} " +
+                            $"({SegmentTable.SnakeName(Sensors[i].Segment)}) both use node id {Sensors[i].NodeId}: each node id at most once",
+                            nameof(Sensors));
+                }
         }
     }
 }

@@ -1,5 +1,9 @@
-// Pose recordings: the frame CSV that `mocapctl replay --csv` writes, one row per engine frame:
-//   sequence,time_s,flags, then per segment (engine order) qw,qx,qy,qz,ax,ay,az,flags
+// Frame recordings: the frame CSV that `mocapctl replay --csv` writes, one row per engine frame:
+//   sequence,time_s,flags, then per sensor (the session's config order) qw,qx,qy,qz,ax,ay,az,flags
+// The header row names each sensor's columns after its segment ("chest_qw"), so the header gives
+// the sensor set. Version 2 files start with "# mocap frame recording 2" and must have the
+// header; a file without the version line is version 1, whose rows without a header hold the
+// six segments pelvis .. head in that order.
 // Loaded back into MocapFrames, a recording plays in the editor and in PlayMode tests exactly
 // like frames drained from a live session (only the fields the CSV holds are filled).
 
@@ -15,12 +19,24 @@ namespace Mocap.Imu.Capture
     /// <summary>Frames recorded as CSV (the format of <c>mocapctl replay --csv</c>).</summary>
     public static class FrameRecording
     {
+        /// <summary>The format version <see cref="Save"/> writes.</summary>
+        public const int Version = 2;
+
+        const string VersionPrefix = "# mocap frame recording ";
         const int ColumnsPerSensor = 8;
-        const int Columns = 3 + MocapSession.SensorCount * ColumnsPerSensor;
+        static readonly string[] SensorColumns = { "qw", "qx", "qy", "qz", "ax", "ay", "az", "flags" };
+
+        // Version 1 files have no version line and always carried these six, in this order.
+        static readonly MocapSegment[] VersionOneSegments =
+        {
+            MocapSegment.Pelvis, MocapSegment.LeftWrist, MocapSegment.RightWrist,
+            MocapSegment.LeftShin, MocapSegment.RightShin, MocapSegment.Head,
+        };
 
         /// <summary>
-        /// Read every frame of a recording. Fills sequence, time, flags, fresh mask (from the
-        /// sensors' Held flag), bone orientation, bone acceleration and sensor flags.
+        /// Read every frame of a recording (version 1 or 2). Fills sequence, time, flags, sensor
+        /// count, and per sensor its segment, bone orientation, bone acceleration, flags, the
+        /// fresh mask and a state derived from the flags.
         /// </summary>
         /// <exception cref="MocapException">NotFound, Permission or IO naming the file and the cause;
         /// Format naming the file and line.</exception>
@@ -28,51 +44,82 @@ namespace Mocap.Imu.Capture
         {
             string[] lines = RecordingFiles.ReadAllLines(path, "frame recording");
             var frames = new List<MocapFrame>(lines.Length);
+            int version = 1;
+            MocapSegment[] segments = null;
             for (int i = 0; i < lines.Length; i++)
             {
                 string line = lines[i].Trim();
-                if (line.Length == 0 || line[0] == '#' || line.StartsWith("sequence", StringComparison.Ordinal))
+                if (line.Length == 0) continue;
+                if (line.StartsWith(VersionPrefix, StringComparison.Ordinal))
+                {
+                    if (frames.Count > 0 || segments != null)
+                        throw Error(path, i + 1, "the version line must come before the header and the rows");
+                    version = ParseVersion(line.Substring(VersionPrefix.Length), path, i + 1);
                     continue;
-                frames.Add(ParseRow(line, path, i + 1));
+                }
+                if (line[0] == '#') continue;
+                if (line.StartsWith("sequence", StringComparison.Ordinal))
+                {
+                    if (frames.Count > 0 || segments != null)
+                        throw Error(path, i + 1, "a second header, or a header after the rows");
+                    segments = ParseHeader(line, path, i + 1);
+                    continue;
+                }
+                if (segments == null)
+                {
+                    if (version != 1) throw Error(path, i + 1, "a row before the header (version 2 files name their sensors there)");
+                    segments = VersionOneSegments;
+                }
+                frames.Add(ParseRow(line, segments, path, i + 1));
             }
             return frames.ToArray();
         }
 
         /// <summary>
-        /// Write frames in the same format (mocapctl's precision), replacing <paramref name="path"/>
-        /// only once every frame was written.
+        /// Write frames in the current format (mocapctl's precision), replacing <paramref name="path"/>
+        /// only once every frame was written. Every frame must have the first frame's sensors.
         /// </summary>
         /// <exception cref="MocapException">InvalidArgument for a frame holding NaN or infinity (which
-        /// <see cref="Load"/> would refuse); NotFound, Permission or IO when the file cannot be
-        /// written. The previous file is then unchanged.</exception>
+        /// <see cref="Load"/> would refuse) or other sensors than the first frame; NotFound,
+        /// Permission or IO when the file cannot be written. The previous file is then unchanged.</exception>
         public static void Save(string path, ReadOnlySpan<MocapFrame> frames)
         {
             // A span cannot enter a lambda: the writer walks an array.
             var all = frames.ToArray();
+            var segments = new MocapSegment[all.Length > 0 ? all[0].SensorCount : 0];
+            for (int s = 0; s < segments.Length; s++) segments[s] = all[0].GetSensor(s).Segment;
+            for (int i = 0; i < all.Length; i++)
+            {
+                string problem = SensorSetDiffers(all[i], segments);
+                if (problem != null)
+                    throw new MocapException(MocapStatus.InvalidArgument,
+                        $"frame recording {path}: frame {i}: {problem}; nothing was written");
+                string field = FirstNonFinite(all[i]);
+                if (field != null)
+                    throw new MocapException(MocapStatus.InvalidArgument,
+                        $"frame recording {path}: frame {i}: {field} is not finite; nothing was written");
+            }
             RecordingFiles.WriteReplacing(path, "frame recording", stream =>
             {
                 // Not disposed: closing the stream is WriteReplacing's (and a failed flush here
                 // must not hide the exception that stopped the writing).
                 var writer = new StreamWriter(stream, new UTF8Encoding(false), 1 << 16) { NewLine = "\n" };
+                writer.WriteLine(VersionPrefix + Version.ToString(CultureInfo.InvariantCulture));
                 writer.Write("sequence,time_s,flags");
-                for (int s = 0; s < MocapSession.SensorCount; s++)
+                foreach (var segment in segments)
                 {
-                    string n = SegmentNames[s];
-                    writer.Write($",{n}_qw,{n}_qx,{n}_qy,{n}_qz,{n}_ax,{n}_ay,{n}_az,{n}_flags");
+                    string n = SegmentTable.SnakeName(segment);
+                    foreach (var column in SensorColumns) writer.Write($",{n}_{column}");
                 }
                 writer.WriteLine();
                 var c = CultureInfo.InvariantCulture;
                 for (int i = 0; i < all.Length; i++)
                 {
                     ref readonly MocapFrame f = ref all[i];
-                    string field = FirstNonFinite(f);
-                    if (field != null)
-                        throw new MocapException(MocapStatus.InvalidArgument,
-                            $"frame recording {path}: frame {i}: {field} is not finite; nothing was written");
                     writer.Write(string.Format(c, "{0},{1:F6},{2}", f.Sequence, f.TimeSeconds, (uint)f.Flags));
-                    for (int s = 0; s < MocapSession.SensorCount; s++)
+                    for (int s = 0; s < segments.Length; s++)
                     {
-                        var sf = f.GetSensor((MocapSegment)s);
+                        var sf = f.GetSensor(s);
                         var q = sf.BoneOrientation;
                         var a = sf.BoneAcceleration;
                         writer.Write(string.Format(c, ",{0:F6},{1:F6},{2:F6},{3:F6},{4:F4},{5:F4},{6:F4},{7}",
@@ -84,40 +131,85 @@ namespace Mocap.Imu.Capture
             });
         }
 
+        static string SensorSetDiffers(in MocapFrame frame, MocapSegment[] segments)
+        {
+            if (frame.SensorCount != segments.Length)
+                return $"{frame.SensorCount} sensors, the first frame has {segments.Length}";
+            for (int s = 0; s < segments.Length; s++)
+                if (frame.GetSensor(s).Segment != segments[s])
+                    return $"sensor {s} is on {SegmentTable.SnakeName(frame.GetSensor(s).Segment)}, " +
+                           $"in the first frame on {SegmentTable.SnakeName(segments[s])}";
+            return null;
+        }
+
         // The values the CSV holds that Load requires finite; null when all are.
         static string FirstNonFinite(in MocapFrame frame)
         {
             if (!double.IsFinite(frame.TimeSeconds)) return "time";
-            for (int s = 0; s < MocapSession.SensorCount; s++)
+            for (int s = 0; s < frame.SensorCount; s++)
             {
-                var sensor = frame.GetSensor((MocapSegment)s);
+                var sensor = frame.GetSensor(s);
                 var q = sensor.BoneOrientation;
                 var a = sensor.BoneAcceleration;
                 if (!float.IsFinite(q.W) || !float.IsFinite(q.X) || !float.IsFinite(q.Y) || !float.IsFinite(q.Z))
-                    return SegmentNames[s] + " orientation";
+                    return SegmentTable.SnakeName(sensor.Segment) + " orientation";
                 if (!float.IsFinite(a.X) || !float.IsFinite(a.Y) || !float.IsFinite(a.Z))
-                    return SegmentNames[s] + " acceleration";
+                    return SegmentTable.SnakeName(sensor.Segment) + " acceleration";
             }
             return null;
         }
 
-        // The engine's segment names (mocap_segment_name), kept here so recordings need no engine.
-        static readonly string[] SegmentNames =
-            { "pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head" };
+        static int ParseVersion(string text, string path, int lineNumber)
+        {
+            if (!int.TryParse(text.Trim(), NumberStyles.None, CultureInfo.InvariantCulture, out int version) || version < 1)
+                throw Error(path, lineNumber, $"'{text.Trim()}' is not a format version");
+            if (version > Version)
+                throw Error(path, lineNumber, $"format version {version}; this reader knows versions 1 to {Version}");
+            return version;
+        }
 
-        static MocapFrame ParseRow(string line, string path, int lineNumber)
+        // The sensor set from the column names: "<segment>_qw" ... "<segment>_flags" per sensor.
+        static MocapSegment[] ParseHeader(string line, string path, int lineNumber)
         {
             var cells = line.Split(',');
-            if (cells.Length != Columns)
-                throw new MocapException(MocapStatus.Format,
-                    $"frame recording {path}:{lineNumber}: {cells.Length} columns, expected {Columns}");
+            if (cells.Length < 3 || cells[0] != "sequence" || cells[1] != "time_s" || cells[2] != "flags")
+                throw Error(path, lineNumber, "the header does not start with sequence,time_s,flags");
+            if ((cells.Length - 3) % ColumnsPerSensor != 0)
+                throw Error(path, lineNumber, $"{cells.Length} columns: not 3 plus {ColumnsPerSensor} per sensor");
+            int count = (cells.Length - 3) / ColumnsPerSensor;
+            if (count > MocapSession.MaxSensors)
+                throw Error(path, lineNumber, $"{count} sensors; a frame holds at most {MocapSession.MaxSensors}");
+            var segments = new MocapSegment[count];
+            for (int s = 0; s < count; s++)
+            {
+                string first = cells[3 + s * ColumnsPerSensor];
+                string name = first.EndsWith("_qw", StringComparison.Ordinal) ? first.Substring(0, first.Length - 3) : null;
+                if (name == null || !SegmentTable.TryParseSnakeName(name, out segments[s]))
+                    throw Error(path, lineNumber, $"column '{first}' does not name a body segment's qw");
+                for (int k = 0; k < ColumnsPerSensor; k++)
+                    if (cells[3 + s * ColumnsPerSensor + k] != name + "_" + SensorColumns[k])
+                        throw Error(path, lineNumber,
+                            $"column '{cells[3 + s * ColumnsPerSensor + k]}', expected '{name}_{SensorColumns[k]}'");
+                if (Array.IndexOf(segments, segments[s], 0, s) >= 0)
+                    throw Error(path, lineNumber, $"sensor {name} appears twice");
+            }
+            return segments;
+        }
+
+        static MocapFrame ParseRow(string line, MocapSegment[] segments, string path, int lineNumber)
+        {
+            var cells = line.Split(',');
+            int columns = 3 + segments.Length * ColumnsPerSensor;
+            if (cells.Length != columns)
+                throw Error(path, lineNumber, $"{cells.Length} columns, expected {columns}");
             var frame = new MocapFrame
             {
                 Sequence = Unsigned(cells[0], path, lineNumber),
                 TimeSeconds = Double(cells[1], path, lineNumber),
                 Flags = (MocapFrameFlags)(uint)Unsigned(cells[2], path, lineNumber, uint.MaxValue),
+                SensorCount = segments.Length,
             };
-            for (int s = 0; s < MocapSession.SensorCount; s++)
+            for (int s = 0; s < segments.Length; s++)
             {
                 int c = 3 + s * ColumnsPerSensor;
                 var sensor = new MocapSensorFrame
@@ -128,14 +220,27 @@ namespace Mocap.Imu.Capture
                     BoneAcceleration = new MocapVector3(Number(cells[c + 4], path, lineNumber),
                         Number(cells[c + 5], path, lineNumber), Number(cells[c + 6], path, lineNumber)),
                     Flags = (MocapSensorFlags)(uint)Unsigned(cells[c + 7], path, lineNumber, uint.MaxValue),
+                    Segment = segments[s],
                 };
+                sensor.State = StateFromFlags(sensor.Flags);
                 // The CSV has no fresh mask; a valid sensor that is not held was fresh.
-                if ((sensor.Flags & (MocapSensorFlags.Valid | MocapSensorFlags.Held)) == MocapSensorFlags.Valid)
-                    frame.FreshMask |= 1u << s;
-                frame.SetSensor((MocapSegment)s, sensor);
+                if (sensor.State == MocapSensorState.Fresh) frame.FreshMask |= 1u << s;
+                frame.SetSensor(s, sensor);
             }
             return frame;
         }
+
+        // The CSV keeps the flags only; they say the same as the state in bits.
+        static MocapSensorState StateFromFlags(MocapSensorFlags flags)
+        {
+            if ((flags & MocapSensorFlags.Valid) == 0) return MocapSensorState.Absent;
+            if ((flags & MocapSensorFlags.Stale) != 0) return MocapSensorState.Silent;
+            if ((flags & MocapSensorFlags.Held) != 0) return MocapSensorState.Holding;
+            return MocapSensorState.Fresh;
+        }
+
+        static MocapException Error(string path, int lineNumber, string what) =>
+            new MocapException(MocapStatus.Format, $"frame recording {path}:{lineNumber}: {what}");
 
         static ulong Unsigned(string text, string path, int lineNumber, ulong max = ulong.MaxValue)
         {

@@ -27,12 +27,11 @@ namespace Mocap.Imu
         internal const string Library = "mocap_imu";
 
         /// <summary>MOCAP_API_VERSION (major) these bindings mirror.</summary>
-        internal const int ApiVersion = 5;
+        internal const int ApiVersion = 6;
 
         /// <summary>MOCAP_API_VERSION_MINOR these bindings need at least.</summary>
-        internal const int ApiMinorVersion = 1;
+        internal const int ApiMinorVersion = 0;
 
-        internal const int SensorCount = 6;
         internal const int PathMax = 260;
 
         const CallingConvention Cdecl = CallingConvention.Cdecl;
@@ -56,7 +55,19 @@ namespace Mocap.Imu
         internal static extern IntPtr mocap_version_string();
 
         [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern int mocap_segment_count();
+
+        [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern IntPtr mocap_segment_name(int segment);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern int mocap_segment_find(byte* name);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern int mocap_segment_joint(int segment);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern int mocap_segment_default_node(int segment);
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_config_defaults(NativeSessionConfig* config);

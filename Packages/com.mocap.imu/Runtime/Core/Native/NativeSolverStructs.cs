@@ -26,6 +26,9 @@ namespace Mocap.Imu
         internal const int JointCount = 24;
 
         [NativeName("contract_version")] public int ContractVersion;
+        [NativeName("sensor_count")] public uint SensorCount;
+        [NativeName("sensor_segments")] public fixed int SensorSegments[MocapSession.MaxSensors];
+        [NativeName("sensor_required_mask")] public uint SensorRequiredMask;
         [NativeName("frame_rate")] public float FrameRate;
         [NativeName("state_layers")] public int StateLayers;
         [NativeName("state_size")] public int StateSize;

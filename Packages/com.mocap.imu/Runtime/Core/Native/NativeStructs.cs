@@ -11,7 +11,11 @@ using System.Runtime.InteropServices;
 
 namespace Mocap.Imu
 {
-    /// <summary>The six body segments, in the engine's fixed sensor order.</summary>
+    /// <summary>
+    /// Body segments a sensor can ride on (mocap_segment). The engine's segment table
+    /// (<see cref="SegmentTable"/>) gives each its name, SMPL joint and default node; a test keeps
+    /// these members equal to that table.
+    /// </summary>
     public enum MocapSegment
     {
         Pelvis = 0,
@@ -20,6 +24,20 @@ namespace Mocap.Imu
         LeftShin = 3,
         RightShin = 4,
         Head = 5,
+        Chest = 6,
+    }
+
+    /// <summary>What a sensor gave one frame (mocap_sensor_state).</summary>
+    public enum MocapSensorState
+    {
+        /// <summary>Samples bracketed the frame time: interpolated.</summary>
+        Fresh = 0,
+        /// <summary>No sample after the frame time yet: the last value is held.</summary>
+        Holding = 1,
+        /// <summary>Nothing for longer than the stale threshold: the held value is old.</summary>
+        Silent = 2,
+        /// <summary>Never sent a sample: the values are placeholders.</summary>
+        Absent = 3,
     }
 
     /// <summary>Per-sensor flags of <see cref="MocapSensorFrame"/>.</summary>
@@ -44,7 +62,7 @@ namespace Mocap.Imu
     public enum MocapFrameFlags : uint
     {
         None = 0,
-        /// <summary>Every sensor has a calibration.</summary>
+        /// <summary>Every required (not optional) sensor has a calibration.</summary>
         Calibrated = 1u << 0,
         /// <summary>Every sensor had a fresh sample bracketing the frame.</summary>
         Complete = 1u << 1,
@@ -140,6 +158,10 @@ namespace Mocap.Imu
         [NativeName("flags")] public MocapSensorFlags Flags;
         /// <summary>HiPNUC node id the sample came from.</summary>
         [NativeName("node_id")] public uint NodeId;
+        /// <summary>The segment the sensor rides on (from the session config).</summary>
+        [NativeName("segment")] public MocapSegment Segment;
+        /// <summary>Fresh, holding, silent or absent this frame.</summary>
+        [NativeName("state")] public MocapSensorState State;
 
         public bool IsCalibrated => (Flags & MocapSensorFlags.Calibrated) != 0;
         public bool IsValid => (Flags & MocapSensorFlags.Valid) != 0;
@@ -152,7 +174,7 @@ namespace Mocap.Imu
     [Serializable]
     [NativeName("mocap_frame")]
     [StructLayout(LayoutKind.Sequential)]
-    public struct MocapFrame
+    public unsafe struct MocapFrame
     {
         /// <summary>0, 1, 2 ... per session; a gap means frames were dropped.</summary>
         [NativeName("sequence")] public ulong Sequence;
@@ -163,52 +185,78 @@ namespace Mocap.Imu
         /// <summary>Session clock when the engine produced the frame, ns.</summary>
         [NativeName("emitted_ns")] public long EmittedNs;
         [NativeName("flags")] public MocapFrameFlags Flags;
-        /// <summary>Bit s set: the sensor of segment s had a fresh sample for this frame.</summary>
+        /// <summary>Bit i set: sensor i (config order) had a fresh sample for this frame.</summary>
         [NativeName("fresh_mask")] public uint FreshMask;
+        [NativeName("sensor_count")] uint _sensorCount;
+        [NativeName("reserved")] uint _reserved;
+        // C has mocap_sensor_frame sensors[16]; C# 9 has no inline arrays of structs, so the
+        // sixteen elements live in a fixed buffer of the same size, read through a pointer cast.
+        [NativeName("sensors")] fixed uint _sensors[MocapSession.MaxSensors * SensorFrameWords];
 
-        // C has mocap_sensor_frame sensors[6]; C# 9 has no inline arrays of structs, so the six
-        // elements are six consecutive fields (the layout test checks they are contiguous).
-        [NativeName("sensors", Count = MocapSession.SensorCount)] public MocapSensorFrame Pelvis;
-        public MocapSensorFrame LeftWrist;
-        public MocapSensorFrame RightWrist;
-        public MocapSensorFrame LeftShin;
-        public MocapSensorFrame RightShin;
-        public MocapSensorFrame Head;
+        // sizeof(mocap_sensor_frame) / 4; the layout test checks the buffer against the engine.
+        internal const int SensorFrameWords = 22;
 
         public bool IsCalibrated => (Flags & MocapFrameFlags.Calibrated) != 0;
         public bool IsComplete => (Flags & MocapFrameFlags.Complete) != 0;
 
-        /// <summary>Whether the sensor of a segment had a fresh sample for this frame.</summary>
-        public bool IsFresh(MocapSegment segment) => (FreshMask & (1u << (int)segment)) != 0;
-
-        /// <summary>The sensor of a segment (a copy; no allocation).</summary>
-        public MocapSensorFrame GetSensor(MocapSegment segment)
+        /// <summary>
+        /// The session's sensors in this frame, in its config order (0..16). Set it when building
+        /// frames by hand (recordings) before <see cref="SetSensor"/>.
+        /// </summary>
+        public int SensorCount
         {
-            switch (segment)
+            get => (int)_sensorCount;
+            set
             {
-                case MocapSegment.Pelvis: return Pelvis;
-                case MocapSegment.LeftWrist: return LeftWrist;
-                case MocapSegment.RightWrist: return RightWrist;
-                case MocapSegment.LeftShin: return LeftShin;
-                case MocapSegment.RightShin: return RightShin;
-                case MocapSegment.Head: return Head;
-                default: throw new ArgumentOutOfRangeException(nameof(segment));
+                if ((uint)value > MocapSession.MaxSensors)
+                    throw new ArgumentOutOfRangeException(nameof(value), value,
+                        $"a frame holds at most {MocapSession.MaxSensors} sensors");
+                _sensorCount = (uint)value;
             }
         }
 
-        /// <summary>Replace the sensor of a segment (used when building frames from recordings).</summary>
-        public void SetSensor(MocapSegment segment, in MocapSensorFrame sensor)
+        /// <summary>Whether sensor <paramref name="index"/> had a fresh sample for this frame.</summary>
+        public bool IsFresh(int index) => (uint)index < 32 && (FreshMask & (1u << index)) != 0;
+
+        /// <summary>Sensor <paramref name="index"/> (0 .. <see cref="SensorCount"/>-1), a copy; no allocation.</summary>
+        public MocapSensorFrame GetSensor(int index)
         {
-            switch (segment)
+            if ((uint)index >= _sensorCount)
+                throw new ArgumentOutOfRangeException(nameof(index), index, $"the frame has {_sensorCount} sensors");
+            fixed (uint* words = _sensors) return ((MocapSensorFrame*)words)[index];
+        }
+
+        /// <summary>Replace sensor <paramref name="index"/> (0 .. <see cref="SensorCount"/>-1).</summary>
+        public void SetSensor(int index, in MocapSensorFrame sensor)
+        {
+            if ((uint)index >= _sensorCount)
+                throw new ArgumentOutOfRangeException(nameof(index), index, $"the frame has {_sensorCount} sensors");
+            fixed (uint* words = _sensors) ((MocapSensorFrame*)words)[index] = sensor;
+        }
+
+        /// <summary>The index of the sensor on <paramref name="segment"/>, or -1 when the frame has none.</summary>
+        public int IndexOf(MocapSegment segment)
+        {
+            fixed (uint* words = _sensors)
             {
-                case MocapSegment.Pelvis: Pelvis = sensor; break;
-                case MocapSegment.LeftWrist: LeftWrist = sensor; break;
-                case MocapSegment.RightWrist: RightWrist = sensor; break;
-                case MocapSegment.LeftShin: LeftShin = sensor; break;
-                case MocapSegment.RightShin: RightShin = sensor; break;
-                case MocapSegment.Head: Head = sensor; break;
-                default: throw new ArgumentOutOfRangeException(nameof(segment));
+                var sensors = (MocapSensorFrame*)words;
+                for (int i = 0; i < (int)_sensorCount && i < MocapSession.MaxSensors; i++)
+                    if (sensors[i].Segment == segment) return i;
             }
+            return -1;
+        }
+
+        /// <summary>The sensor on <paramref name="segment"/>, when the frame has one; no allocation.</summary>
+        public bool TryGetSensor(MocapSegment segment, out MocapSensorFrame sensor)
+        {
+            int index = IndexOf(segment);
+            if (index < 0)
+            {
+                sensor = default;
+                return false;
+            }
+            fixed (uint* words = _sensors) sensor = ((MocapSensorFrame*)words)[index];
+            return true;
         }
     }
 
@@ -253,7 +301,7 @@ namespace Mocap.Imu
         [NativeName("connection_state")] public MocapConnectionState ConnectionState;
         /// <summary>Status of the capture writer (<see cref="MocapStatus.Ok"/> when fine).</summary>
         [NativeName("capture_error")] public MocapStatus CaptureError;
-        /// <summary>Bit s: the sensor of segment s has produced a sample.</summary>
+        /// <summary>Bit i: sensor i (config order) has produced a sample.</summary>
         [NativeName("sensors_seen_mask")] public uint SensorsSeenMask;
         [NativeName("replay_tail_damaged")] private int _replayTailDamaged;
         [NativeName("last_error")] private fixed byte _lastError[256];
@@ -299,7 +347,10 @@ namespace Mocap.Imu
         [NativeName("baud")] public uint Baud;
         [NativeName("hid_vendor_id")] public ushort HidVendorId;
         [NativeName("hid_product_id")] public ushort HidProductId;
-        [NativeName("node_ids")] public fixed int NodeIds[NativeMethods.SensorCount];
+        [NativeName("sensor_count")] public uint SensorCount;
+        [NativeName("sensor_segments")] public fixed int SensorSegments[MocapSession.MaxSensors];
+        [NativeName("node_ids")] public fixed int NodeIds[MocapSession.MaxSensors];
+        [NativeName("optional_mask")] public uint OptionalMask;
         [NativeName("imusol_layout")] public int ImusolLayout;
         [NativeName("world_frame")] public int WorldFrame;
         [NativeName("output_rate_hz")] public float OutputRateHz;
@@ -313,16 +364,12 @@ namespace Mocap.Imu
         [NativeName("capture_path")] public fixed byte CapturePath[NativeMethods.PathMax];
     }
 
-    /// <summary>
-    /// Marks a mirror of a C struct or field with its C name, for the layout test. Count &gt; 1
-    /// marks the first of that many consecutive fields that stand for a C array of structs.
-    /// </summary>
+    /// <summary>Marks a mirror of a C struct or field with its C name, for the layout test.</summary>
     [AttributeUsage(AttributeTargets.Struct | AttributeTargets.Field)]
     internal sealed class NativeNameAttribute : Attribute
     {
         public NativeNameAttribute(string name) { Name = name; }
         public string Name { get; }
-        public int Count { get; set; } = 1;
     }
 
     /// <summary>One row of mocap_struct_layout(): a struct (FieldName "") or one of its fields.</summary>

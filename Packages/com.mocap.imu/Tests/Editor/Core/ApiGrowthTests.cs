@@ -39,7 +39,7 @@ namespace Mocap.Imu.Tests
             TestPaths.RequireEngine();
             Assert.AreEqual(MocapEngine.BindingsApi, MocapEngine.LibraryApi);
             Assert.AreEqual(MocapEngine.ApiVersion, MocapEngine.LibraryApi.Major);
-            Assert.GreaterOrEqual(MocapEngine.LibraryApi.Minor, 1, "counters by key came with 5.1");
+            Assert.GreaterOrEqual(MocapEngine.LibraryApi.Major, 6, "sensor sets came with 6.0");
             Assert.DoesNotThrow(MocapEngine.EnsureCompatible);
         }
 
@@ -56,12 +56,12 @@ namespace Mocap.Imu.Tests
         // "FramesNonFinite" and FRAMES_NONFINITE are one key: compare without underscores or case.
         static string Key(string name) => name.Replace("_", "").ToUpperInvariant();
 
-        static void AssertMirrors<TEnum>(string prefix) where TEnum : struct, Enum
+        static void AssertMirrors<TEnum>(string prefix, int minimum = 11) where TEnum : struct, Enum
         {
             var header = new Dictionary<string, int>();
             foreach (var pair in HeaderKeys(prefix)) header[Key(pair.Key)] = pair.Value;
             var names = Enum.GetNames(typeof(TEnum));
-            Assert.Greater(header.Count, 10, $"the header's {prefix}* keys were found");
+            Assert.GreaterOrEqual(header.Count, minimum, $"the header's {prefix}* keys were found");
             Assert.AreEqual(header.Count, names.Length, $"{typeof(TEnum).Name} has as many keys as the header");
             foreach (var name in names)
             {
@@ -76,6 +76,30 @@ namespace Mocap.Imu.Tests
         {
             AssertMirrors<SessionCounter>("MOCAP_SESSION_");
             AssertMirrors<SolverCounter>("MOCAP_SOLVER_");
+        }
+
+        [Test]
+        public void SegmentEnumEqualsTheEnginesSegmentTable()
+        {
+            // Segments are added as table rows (a minor version): MocapSegment must list exactly
+            // the engine's rows, each under its name in PascalCase, and the header's enum agrees.
+            TestPaths.RequireEngine();
+            var members = (MocapSegment[])Enum.GetValues(typeof(MocapSegment));
+            Assert.AreEqual(SegmentTable.Count, members.Length, "MocapSegment has a member per row of the engine's table");
+            for (int s = 0; s < SegmentTable.Count; s++)
+            {
+                var segment = (MocapSegment)s;
+                Assert.IsTrue(Enum.IsDefined(typeof(MocapSegment), segment), $"no MocapSegment member for row {s} ({SegmentTable.Name(segment)})");
+                Assert.AreEqual(SegmentTable.Name(segment), SegmentTable.SnakeName(segment), $"MocapSegment.{segment}");
+                Assert.IsTrue(SegmentTable.TryFind(SegmentTable.Name(segment), out var found));
+                Assert.AreEqual(segment, found);
+                Assert.IsTrue(SegmentTable.TryParseSnakeName(SegmentTable.Name(segment), out var parsed));
+                Assert.AreEqual(segment, parsed);
+            }
+            AssertMirrors<MocapSegment>("MOCAP_SEGMENT_", minimum: 6);
+            Assert.IsFalse(SegmentTable.TryFind("tail", out _));
+            Assert.IsFalse(SegmentTable.TryFind("Pelvis", out _), "names are exact, lower case");
+            Assert.Throws<ArgumentOutOfRangeException>(() => SegmentTable.Name((MocapSegment)SegmentTable.Count));
         }
 
         [Test]

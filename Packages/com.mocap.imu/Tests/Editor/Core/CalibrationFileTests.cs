@@ -36,7 +36,9 @@ namespace Mocap.Imu.Tests
         {
             var path = Path.Combine(_dir, "exact.calibration");
             _calibration.Save(path);
-            StringAssert.StartsWith("mocap-calibration 1", File.ReadAllText(path));
+            StringAssert.StartsWith("mocap-calibration 2", File.ReadAllText(path));
+            CollectionAssert.Contains(File.ReadAllLines(path), "sensors pelvis left_wrist right_wrist left_shin right_shin head",
+                "the file names its sensors by segment, in the session's order");
             var loaded = CalibrationData.Load(path);
             Assert.IsTrue(SameBytes(_calibration, loaded), "%.9g round-trips every float exactly");
             Assert.AreEqual(0x3Fu, loaded.ValidMask);
@@ -52,12 +54,12 @@ namespace Mocap.Imu.Tests
             string line = Array.Find(lines, l => l.StartsWith("left_shin.sensor_to_bone "));
             Assert.IsNotNull(line);
             var numbers = line.Split(' ');
-            var m = _calibration.GetSensorToBone(MocapSegment.LeftShin);
+            var m = _calibration.GetSensorToBone(_calibration.EntryOf(MocapSegment.LeftShin));
             for (int k = 0; k < 9; k++)
                 Assert.AreEqual(float.Parse(numbers[1 + k], System.Globalization.CultureInfo.InvariantCulture), m[k / 3, k % 3],
                     $"left_shin.sensor_to_bone[{k}]");
             line = Array.Find(lines, l => l.StartsWith("head.acceleration_offset "));
-            var offset = _calibration.GetAccelerationOffset(MocapSegment.Head);
+            var offset = _calibration.GetAccelerationOffset(_calibration.EntryOf(MocapSegment.Head));
             Assert.AreEqual(float.Parse(line.Split(' ')[2], System.Globalization.CultureInfo.InvariantCulture), offset.Y);
             Assert.AreEqual(9.81, offset.Y, 0.5, "gravity is on model +Y in the T-pose");
         }
@@ -82,11 +84,13 @@ namespace Mocap.Imu.Tests
         {
             // default(CalibrationData) has struct_size 0; the bindings fill it in on the way out.
             var manual = default(CalibrationData);
-            for (int s = 0; s < 6; s++)
+            for (int s = 0; s < _calibration.SensorCount; s++)
             {
-                manual.SetWorldToModel((MocapSegment)s, _calibration.GetWorldToModel((MocapSegment)s));
-                manual.SetSensorToBone((MocapSegment)s, _calibration.GetSensorToBone((MocapSegment)s));
-                manual.SetAccelerationOffset((MocapSegment)s, _calibration.GetAccelerationOffset((MocapSegment)s));
+                int entry = manual.AddSensor(_calibration.GetSegment(s));
+                Assert.AreEqual(s, entry);
+                manual.SetWorldToModel(entry, _calibration.GetWorldToModel(s));
+                manual.SetSensorToBone(entry, _calibration.GetSensorToBone(s));
+                manual.SetAccelerationOffset(entry, _calibration.GetAccelerationOffset(s));
             }
             manual.ValidMask = manual.HeadingMask = 0x3F;
             var path = Path.Combine(_dir, "manual.calibration");
@@ -122,9 +126,10 @@ namespace Mocap.Imu.Tests
         public void NonFiniteCalibrationIsRefused()
         {
             var bad = _calibration;
-            var m = bad.GetWorldToModel(MocapSegment.Head);
+            int head = bad.EntryOf(MocapSegment.Head);
+            var m = bad.GetWorldToModel(head);
             m.M11 = float.NaN;
-            bad.SetWorldToModel(MocapSegment.Head, m);
+            bad.SetWorldToModel(head, m);
             using var session = MocapSession.Open(SessionConfig.Replay(_capture.CapturePath));
             var e = Assert.Throws<MocapException>(() => session.Calibration = bad);
             Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
@@ -171,7 +176,8 @@ namespace Mocap.Imu.Tests
             carried = CalibrationCarry.Match(before, calibrations, new[] { Port(), Playback() });
             Assert.That(carried, Has.All.Null);
             var rewired = new[] { Playback(), Port() };
-            rewired[1].NodeIds[(int)MocapSegment.Head] = 9;
+            int headSensor = rewired[1].IndexOf(MocapSegment.Head);
+            rewired[1].Sensors[headSensor] = new SessionSensor(MocapSegment.Head, 9);
             carried = CalibrationCarry.Match(before, calibrations, rewired);
             Assert.IsTrue(carried[0].HasValue, "the unchanged character keeps its calibration");
             Assert.IsNull(carried[1], "new node ids are other sensors");

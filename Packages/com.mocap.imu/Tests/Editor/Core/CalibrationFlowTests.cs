@@ -34,15 +34,28 @@ namespace Mocap.Imu.Tests
     {
         /// <summary>A report as the engine would fill it (private fields written through their offsets).</summary>
         public static CalibrationReport Report(CalibrationStep step, CalibrationState state, string reason = "",
-                                               float progress = 0, float gyro = 0.5f, uint samples = 100, bool ok = true)
+                                               float progress = 0, float gyro = 0.5f, uint samples = 100, bool ok = true,
+                                               MocapSegment[] segments = null, int leftOut = -1)
         {
+            segments ??= new[] { MocapSegment.Pelvis, MocapSegment.LeftWrist, MocapSegment.RightWrist,
+                                 MocapSegment.LeftShin, MocapSegment.RightShin, MocapSegment.Head };
             var report = new CalibrationReport { Step = step, State = state, Progress = progress };
             byte* b = (byte*)&report;
-            int sensors = (int)Marshal.OffsetOf<CalibrationReport>("_sensor0");
+            int sensors = (int)Marshal.OffsetOf<CalibrationReport>("_sensors");
+            *(uint*)(b + (int)Marshal.OffsetOf<CalibrationReport>("_sensorCount")) = (uint)segments.Length;
             int okOffset = (int)Marshal.OffsetOf<SensorQuality>("_ok");
-            for (int s = 0; s < MocapSession.SensorCount; s++)
+            int leftOutOffset = (int)Marshal.OffsetOf<SensorQuality>("_leftOut");
+            for (int s = 0; s < segments.Length; s++)
             {
                 var q = (SensorQuality*)(b + sensors + s * sizeof(SensorQuality));
+                q->Segment = segments[s];
+                if (s == leftOut)
+                {
+                    // What the engine reports for an optional sensor that sent nothing.
+                    q->GyroRmsDps = q->OrientationSpreadDegrees = q->AccelerationNormError = q->TiltDegrees = 0f;
+                    *(int*)((byte*)q + leftOutOffset) = 1;
+                    continue;
+                }
                 q->GyroRmsDps = gyro;
                 q->OrientationSpreadDegrees = 0.2f;
                 q->AccelerationNormError = 0.05f;
@@ -283,7 +296,33 @@ namespace Mocap.Imu.Tests
             var unmeasured = Fake.Report(CalibrationStep.TPose, CalibrationState.Collecting, gyro: float.NaN, samples: 41);
             string nan = lines.GetLine(unmeasured, MocapSegment.RightShin);
             Assert.AreSame(nan, lines.GetLine(unmeasured, MocapSegment.RightShin), "NaN shows the same each frame");
-            Assert.Throws<ArgumentOutOfRangeException>(() => lines.GetLine(collecting, (MocapSegment)6));
+            Assert.Throws<ArgumentException>(() => lines.GetLine(collecting, MocapSegment.Chest), "the six have no chest");
+            Assert.Throws<ArgumentOutOfRangeException>(() => lines.GetLine(collecting, 6));
+        }
+
+        [Test]
+        public void SummariesFollowTheSessionsSensorsByIndexAndNameThem()
+        {
+            var seven = new[] { MocapSegment.Chest, MocapSegment.Pelvis, MocapSegment.LeftWrist, MocapSegment.RightWrist,
+                                MocapSegment.LeftShin, MocapSegment.RightShin, MocapSegment.Head };
+            var report = Fake.Report(CalibrationStep.TPose, CalibrationState.Accepted, segments: seven, leftOut: 0);
+            var summaries = CalibrationQuality.Summarize(report);
+            Assert.AreEqual(7, summaries.Length);
+            CollectionAssert.AreEqual(seven, Array.ConvertAll(summaries, s => s.Segment), "config order, not segment order");
+            Assert.IsTrue(summaries[0].IsLeftOut);
+            Assert.IsEmpty(summaries[0].Problems, "an optional sensor left out is not a problem");
+            Assert.AreEqual("left out: optional and sent nothing", summaries[0].Text);
+            Assert.IsFalse(summaries[1].IsLeftOut);
+            Assert.AreEqual(1, report.IndexOf(MocapSegment.Pelvis));
+            Assert.IsTrue(report.TryGetSensor(MocapSegment.Chest, out var chest) && chest.IsLeftOut);
+
+            var lines = new CalibrationReportLines();
+            Assert.AreEqual("chest: left out - left out: optional and sent nothing", lines.GetLine(report, MocapSegment.Chest));
+            StringAssert.StartsWith("pelvis: ok", lines.GetLine(report, 1));
+            // The same index now holding another segment is a new line, not the cached one.
+            var six = Fake.Report(CalibrationStep.TPose, CalibrationState.Accepted);
+            StringAssert.StartsWith("pelvis: ok", lines.GetLine(six, 0));
+            StringAssert.StartsWith("left wrist: ok", lines.GetLine(six, 1));
         }
 
         // ---- against the engine, paced replays ----------------------------------------------
@@ -404,14 +443,6 @@ namespace Mocap.Imu.Tests
             Assert.IsFalse(replay.Session.Calibration.IsComplete, "a refused T-pose leaves the calibration as it was");
         }
 
-        static string SensorKey(MocapSegment segment) => segment switch
-        {
-            MocapSegment.Pelvis => "pelvis",
-            MocapSegment.LeftWrist => "left_wrist",
-            MocapSegment.RightWrist => "right_wrist",
-            MocapSegment.LeftShin => "left_shin",
-            MocapSegment.RightShin => "right_shin",
-            _ => "head",
-        };
+        static string SensorKey(MocapSegment segment) => SegmentTable.Name(segment);
     }
 }

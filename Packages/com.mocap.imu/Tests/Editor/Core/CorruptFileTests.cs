@@ -135,9 +135,9 @@ namespace Mocap.Imu.Tests
             foreach (var f in frames)
             {
                 Assert.IsTrue(double.IsFinite(f.TimeSeconds), $"frame {f.Sequence}: time is not finite");
-                for (int s = 0; s < MocapSession.SensorCount; s++)
+                for (int s = 0; s < f.SensorCount; s++)
                 {
-                    var sensor = f.GetSensor((MocapSegment)s);
+                    var sensor = f.GetSensor(s);
                     var q = sensor.BoneOrientation;
                     var a = sensor.BoneAcceleration;
                     Assert.IsTrue(float.IsFinite(q.W) && float.IsFinite(q.X) && float.IsFinite(q.Y) && float.IsFinite(q.Z) &&

@@ -113,7 +113,7 @@ namespace Mocap.Imu.Tests
 
             // Another sensor set is a different character: nothing carried, nothing calibrates it.
             var other = Character("Ada", _walk, windows: false);
-            other.Config.NodeIds[0] = 9;
+            other.Config.Sensors[0] = new SessionSensor(other.Config.Sensors[0].Segment, 9);
             Assert.IsTrue(runner.Restart(Plan(other)));
             RunUntil(runner, MocapRunnerEvent.Opened);
             Assert.IsFalse(runner.GetSession(0).Calibration.IsComplete);

@@ -81,26 +81,54 @@ namespace Mocap.Imu.Tests
                 Assert.IsTrue(_mirrors.TryGetValue(row.Struct, out var type), $"no mirror for {where}");
                 var field = MirroredFields(type).FirstOrDefault(f => f.GetCustomAttribute<NativeNameAttribute>().Name == row.Field);
                 Assert.IsNotNull(field, $"{type.Name} has no field mirroring {where}");
-                int count = field.GetCustomAttribute<NativeNameAttribute>().Count;
                 int offset = (int)Marshal.OffsetOf(type, field.Name);
                 Assert.AreEqual(row.Offset, offset, $"offset of {where} vs {type.Name}.{field.Name}");
-                int elementSize = SizeOfField(field.FieldType);
-                Assert.AreEqual(row.Size, elementSize * count, $"size of {where} vs {type.Name}.{field.Name} x{count}");
-                if (count > 1)
-                {
-                    // The C array of structs is mirrored by `count` consecutive fields of one type.
-                    var all = type.GetFields(BindingFlags.Instance | BindingFlags.Public | BindingFlags.NonPublic)
-                        .OrderBy(f => (int)Marshal.OffsetOf(type, f.Name)).ToList();
-                    int first = all.IndexOf(field);
-                    for (int k = 1; k < count; k++)
-                    {
-                        var element = all[first + k];
-                        Assert.AreEqual(field.FieldType, element.FieldType, $"{where}[{k}] type");
-                        Assert.AreEqual(row.Offset + k * elementSize, (int)Marshal.OffsetOf(type, element.Name),
-                            $"{where}[{k}] ({type.Name}.{element.Name}) offset");
-                    }
-                }
+                Assert.AreEqual(row.Size, SizeOfField(field.FieldType), $"size of {where} vs {type.Name}.{field.Name}");
             }
+        }
+
+        [Test]
+        public void StructArraysInFixedBuffersHaveTheEnginesElementSize()
+        {
+            // MocapFrame and CalibrationReport keep their [16] struct arrays in fixed buffers read
+            // through pointer casts: the element stride must be the engine's sizeof.
+            Assert.AreEqual(EngineSize("mocap_sensor_frame"), sizeof(MocapSensorFrame));
+            Assert.AreEqual(EngineSize("mocap_sensor_frame"), MocapFrame.SensorFrameWords * sizeof(uint));
+            Assert.AreEqual(EngineSize("mocap_sensor_frame") * MocapSession.MaxSensors, FieldSize("mocap_frame", "sensors"));
+            Assert.AreEqual(EngineSize("mocap_sensor_quality") * MocapSession.MaxSensors, FieldSize("mocap_calibration_report", "sensors"));
+            Assert.AreEqual(EngineSize("mocap_sensor_quality"), sizeof(SensorQuality));
+        }
+
+        int EngineSize(string structName) => _rows.Single(r => r.Struct == structName && r.Field.Length == 0).Size;
+        int FieldSize(string structName, string field) => _rows.Single(r => r.Struct == structName && r.Field == field).Size;
+
+        [Test]
+        public void FrameSensorsAreReadAndWrittenByIndexAndFoundBySegment()
+        {
+            var frame = new MocapFrame { SensorCount = 7 };
+            for (int i = 0; i < 7; i++)
+                frame.SetSensor(i, new MocapSensorFrame { Segment = (MocapSegment)(6 - i), NodeId = (uint)(10 + i), AgeSeconds = i });
+            Assert.AreEqual(7, frame.SensorCount);
+            Assert.AreEqual(0, frame.IndexOf(MocapSegment.Chest));
+            Assert.AreEqual(6, frame.IndexOf(MocapSegment.Pelvis));
+            Assert.IsTrue(frame.TryGetSensor(MocapSegment.LeftShin, out var shin));
+            Assert.AreEqual(13u, shin.NodeId);
+            Assert.AreEqual(3f, frame.GetSensor(3).AgeSeconds);
+            // Byte-exact in the engine's layout: sensor i sits at sensors + i * sizeof.
+            byte* bytes = (byte*)&frame;
+            int sensors = _rows.Single(r => r.Struct == "mocap_frame" && r.Field == "sensors").Offset;
+            var fifth = (MocapSensorFrame*)(bytes + sensors + 5 * sizeof(MocapSensorFrame));
+            Assert.AreEqual(MocapSegment.LeftWrist, fifth->Segment);
+            Assert.AreEqual(15u, fifth->NodeId);
+
+            frame.SensorCount = 2;
+            Assert.AreEqual(-1, frame.IndexOf(MocapSegment.Pelvis), "only the first SensorCount sensors count");
+            Assert.AreEqual(1, frame.IndexOf(MocapSegment.Head));
+            Assert.IsFalse(frame.TryGetSensor(MocapSegment.Pelvis, out _));
+            var copy = frame;
+            Assert.Throws<ArgumentOutOfRangeException>(() => copy.GetSensor(2));
+            Assert.Throws<ArgumentOutOfRangeException>(() => copy.SetSensor(-1, default));
+            Assert.Throws<ArgumentOutOfRangeException>(() => copy.SensorCount = MocapSession.MaxSensors + 1);
         }
 
         [Test]
@@ -141,7 +169,7 @@ namespace Mocap.Imu.Tests
         {
             foreach (MocapSegment segment in Enum.GetValues(typeof(MocapSegment)))
                 Assert.AreEqual(UpperSnake(segment.ToString()).ToLowerInvariant(), MocapEngine.SegmentName(segment));
-            Assert.AreEqual(MocapSession.SensorCount, Enum.GetValues(typeof(MocapSegment)).Length);
+            Assert.AreEqual(SegmentTable.Count, Enum.GetValues(typeof(MocapSegment)).Length);
         }
 
         [Test]

@@ -72,9 +72,10 @@ namespace Mocap.Imu.Tests
             byte[] before = File.ReadAllBytes(path);
 
             var bad = Frames(600);
-            var sensor = bad[599].GetSensor(MocapSegment.Head);
+            int head = bad[599].IndexOf(MocapSegment.Head);
+            var sensor = bad[599].GetSensor(head);
             sensor.BoneAcceleration = new MocapVector3(0f, float.NaN, 0f);
-            bad[599].SetSensor(MocapSegment.Head, sensor);
+            bad[599].SetSensor(head, sensor);
             var e = Assert.Throws<MocapException>(() => FrameRecording.Save(path, bad));
             Assert.AreEqual(MocapStatus.InvalidArgument, e.Status, e.Message);
             StringAssert.Contains(path, e.Message);
@@ -279,9 +280,11 @@ namespace Mocap.Imu.Tests
             {
                 frames[i].Sequence = (ulong)i;
                 frames[i].TimeSeconds = i / 60.0;
-                for (int s = 0; s < MocapSession.SensorCount; s++)
-                    frames[i].SetSensor((MocapSegment)s, new MocapSensorFrame
+                frames[i].SensorCount = 6;
+                for (int s = 0; s < 6; s++)
+                    frames[i].SetSensor(s, new MocapSensorFrame
                     {
+                        Segment = (MocapSegment)s,
                         BoneOrientation = new MocapQuaternion(1f, 0f, 0f, 0f),
                         BoneAcceleration = new MocapVector3(0f, 0f, 9.81f + 0.001f * i),
                         Flags = MocapSensorFlags.Valid,

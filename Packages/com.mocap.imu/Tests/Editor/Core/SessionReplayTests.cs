@@ -103,12 +103,19 @@ namespace Mocap.Imu.Tests
         /// Replays a synth capture as fast as possible. With calibration == null it schedules
         /// the heading and T-pose windows of the prelude before Start (the middle of each window,
         /// as mocapctl replay does); otherwise it sets that calibration and schedules nothing.
+        /// <paramref name="sensors"/> replaces the default sensor set.
         /// </summary>
         public static ReplayResult Run(SynthCapture capture, CalibrationData? calibration = null,
-                                       int drainCapacity = 64)
+                                       int drainCapacity = 64, IEnumerable<SessionSensor> sensors = null)
         {
             var result = new ReplayResult();
-            using var session = MocapSession.Open(SessionConfig.Replay(capture.CapturePath));
+            var config = SessionConfig.Replay(capture.CapturePath);
+            if (sensors != null)
+            {
+                config.Sensors.Clear();
+                config.Sensors.AddRange(sensors);
+            }
+            using var session = MocapSession.Open(config);
             if (calibration == null)
             {
                 double t0 = FirstReceiveSeconds(capture.CapturePath);
@@ -156,9 +163,10 @@ namespace Mocap.Imu.Tests
             {
                 if (!f.IsCalibrated) continue;
                 if (!truth.TryGet(f.TimeSeconds, out int phase, out var bones, out var accs) || phase != 3) continue;
+                // The truth lists the six default segments in segment order.
                 for (int s = 0; s < 6; s++)
                 {
-                    var sensor = f.GetSensor((MocapSegment)s);
+                    Assert.IsTrue(f.TryGetSensor((MocapSegment)s, out var sensor), $"frame {f.Sequence} has no {(MocapSegment)s}");
                     double angle = MocapQuaternion.AngleDegrees(sensor.BoneOrientation, bones[s]);
                     sum[s] += angle;
                     max[s] = Math.Max(max[s], angle);
@@ -204,9 +212,12 @@ namespace Mocap.Imu.Tests
                 Assert.AreEqual(CalibrationState.Accepted, report.State, report.ToString());
                 Assert.AreEqual("", report.Reason);
                 Assert.AreEqual(1f, report.Progress, 1e-6f);
+                Assert.AreEqual(6, report.SensorCount);
                 for (int s = 0; s < 6; s++)
                 {
-                    var q = report.GetSensor((MocapSegment)s);
+                    var q = report.GetSensor(s);
+                    Assert.AreEqual((MocapSegment)s, q.Segment, "the default set is in segment order");
+                    Assert.IsFalse(q.IsLeftOut);
                     Assert.IsTrue(q.IsOk, $"{report.Step} {(MocapSegment)s} not ok");
                     Assert.Greater(q.Samples, 50u, $"{report.Step} {(MocapSegment)s} samples");
                     Assert.Less(q.GyroRmsDps, 10f);
@@ -235,12 +246,15 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual(MocapPollResult.EndOfStream, _run.ResultAfterEnd, "stays at the end");
             // Calibrated from the end of the T-pose window on, uncalibrated before the heading step.
             Assert.IsFalse(frames[0].IsCalibrated);
-            Assert.IsFalse(frames[0].Pelvis.IsCalibrated);
+            Assert.IsFalse(frames[0].GetSensor(0).IsCalibrated);
             Assert.IsTrue(frames[frames.Count - 1].IsCalibrated);
             for (int s = 0; s < 6; s++)
             {
-                var sensor = frames[frames.Count - 1].GetSensor((MocapSegment)s);
+                Assert.AreEqual(6, frames[frames.Count - 1].SensorCount);
+                var sensor = frames[frames.Count - 1].GetSensor(s);
+                Assert.AreEqual((MocapSegment)s, sensor.Segment);
                 Assert.IsTrue(sensor.IsValid && sensor.IsCalibrated, $"{(MocapSegment)s} flags {sensor.Flags}");
+                Assert.AreNotEqual(MocapSensorState.Absent, sensor.State, $"{(MocapSegment)s} sent samples");
                 Assert.AreEqual((uint)s, sensor.NodeId, "default node ids are 0..5 in segment order");
             }
             int calibrated = frames.Count(f => f.IsCalibrated);
@@ -358,11 +372,13 @@ namespace Mocap.Imu.Tests
                 Assert.AreEqual(e.TimeSeconds, a.TimeSeconds, 1e-6);
                 Assert.AreEqual(e.Flags, a.Flags, $"frame {i} flags");
                 Assert.AreEqual(e.FreshMask, a.FreshMask, $"frame {i} fresh mask");
-                for (int s = 0; s < 6; s++)
+                Assert.AreEqual(e.SensorCount, a.SensorCount, $"frame {i} sensor count");
+                for (int s = 0; s < e.SensorCount; s++)
                 {
-                    var es = e.GetSensor((MocapSegment)s);
-                    var sensor = a.GetSensor((MocapSegment)s);
-                    string where = $"frame {i} {(MocapSegment)s}";
+                    var es = e.GetSensor(s);
+                    var sensor = a.GetSensor(s);
+                    string where = $"frame {i} sensor {s}";
+                    Assert.AreEqual(es.Segment, sensor.Segment, where);
                     Assert.AreEqual(es.Flags, sensor.Flags, where);
                     Assert.AreEqual(es.BoneOrientation.W, sensor.BoneOrientation.W, 2e-6, where);
                     Assert.AreEqual(es.BoneOrientation.X, sensor.BoneOrientation.X, 2e-6, where);
@@ -385,7 +401,52 @@ namespace Mocap.Imu.Tests
             Assert.AreEqual(frames.Length, loaded.Length);
             var last = loaded[loaded.Length - 1];
             Assert.AreEqual(frames[frames.Length - 1].Sequence, last.Sequence);
-            Assert.AreEqual(frames[frames.Length - 1].Head.BoneOrientation.X, last.Head.BoneOrientation.X, 1e-6);
+            Assert.IsTrue(frames[frames.Length - 1].TryGetSensor(MocapSegment.Head, out var savedHead));
+            Assert.IsTrue(last.TryGetSensor(MocapSegment.Head, out var loadedHead));
+            Assert.AreEqual(savedHead.BoneOrientation.X, loadedHead.BoneOrientation.X, 1e-6);
+            Assert.AreEqual(6, last.SensorCount);
+            StringAssert.StartsWith($"# mocap frame recording {FrameRecording.Version}\n", File.ReadAllText(path));
+        }
+
+        [Test]
+        public void FrameRecordingOfVersionOneStillReadsAsTheSix()
+        {
+            // Version 1 (before sensor sets): no version line; mocapctl wrote the six's header,
+            // older files may hold rows only. Both read as the six segments pelvis .. head.
+            var dir = TestPaths.NewTempDirectory("recording-v1");
+            var current = Path.Combine(dir, "current.csv");
+            FrameRecording.Save(current, _run.Frames.ToArray());
+            var lines = File.ReadAllLines(current);
+            Assert.AreEqual("# mocap frame recording 2", lines[0]);
+            StringAssert.StartsWith("sequence,time_s,flags,pelvis_qw,pelvis_qx", lines[1]);
+            var withHeader = Path.Combine(dir, "v1-header.csv");
+            File.WriteAllLines(withHeader, lines.Skip(1));
+            var rowsOnly = Path.Combine(dir, "v1-rows.csv");
+            File.WriteAllLines(rowsOnly, lines.Skip(2));
+            foreach (var path in new[] { withHeader, rowsOnly })
+            {
+                var frames = FrameRecording.Load(path);
+                Assert.AreEqual(_run.Frames.Count, frames.Length, path);
+                var last = frames[frames.Length - 1];
+                Assert.AreEqual(6, last.SensorCount, path);
+                for (int s = 0; s < 6; s++) Assert.AreEqual((MocapSegment)s, last.GetSensor(s).Segment, path);
+                Assert.AreEqual(_run.Frames[_run.Frames.Count - 1].GetSensor(5).BoneOrientation.Y,
+                                last.GetSensor(5).BoneOrientation.Y, 1e-6, path);
+            }
+
+            // A later version, or a version 2 file without its header, is refused by name.
+            var future = Path.Combine(dir, "v3.csv");
+            File.WriteAllLines(future, new[] { "# mocap frame recording 3" }.Concat(lines.Skip(1)));
+            var e = Assert.Throws<MocapException>(() => FrameRecording.Load(future));
+            StringAssert.Contains("format version 3", e.Message);
+            var headless = Path.Combine(dir, "v2-rows.csv");
+            File.WriteAllLines(headless, new[] { lines[0] }.Concat(lines.Skip(2)));
+            e = Assert.Throws<MocapException>(() => FrameRecording.Load(headless));
+            StringAssert.Contains("v2-rows.csv:2: a row before the header", e.Message);
+            var unknown = Path.Combine(dir, "tail.csv");
+            File.WriteAllLines(unknown, new[] { lines[0], lines[1].Replace("pelvis_", "tail_") }.Concat(lines.Skip(2)));
+            e = Assert.Throws<MocapException>(() => FrameRecording.Load(unknown));
+            StringAssert.Contains("column 'tail_qw' does not name a body segment", e.Message);
         }
 
         [TestCase(0, "12x")]

@@ -241,13 +241,14 @@ namespace Mocap.Imu.Tests
         static string Quote(string arg) => "\"" + arg + "\"";
 
         /// <summary>
-        /// A synthetic 6-sensor capture of a built-in motion with realistic noise (generated once
-        /// per run and argument set).
+        /// A synthetic capture of a built-in motion with realistic noise (generated once per run
+        /// and argument set): the default six sensors, or the set <paramref name="sensors"/> gives
+        /// as mocapctl's --sensors list ("pelvis=0,...,chest=6").
         /// </summary>
         public static SynthCapture Synth(string motion = "walk", double seconds = 6, int seed = 3,
-                                         string world = "nwu")
+                                         string world = "nwu", string sensors = null)
         {
-            var key = $"{motion}-{seconds}-{seed}-{world}";
+            var key = $"{motion}-{seconds}-{seed}-{world}" + (sensors == null ? "" : $"-{sensors.Split(',').Length}sensors-{sensors.GetHashCode():x8}");
             if (Captures.TryGetValue(key, out var cached) && File.Exists(cached.CapturePath)) return cached;
             var dir = NewTempDirectory("synth");
             var capture = new SynthCapture
@@ -255,9 +256,14 @@ namespace Mocap.Imu.Tests
                 CapturePath = Path.Combine(dir, key + ".cap"),
                 TruthPath = Path.Combine(dir, key + ".truth.csv"),
             };
-            RunMocapctl("synth", "--out", capture.CapturePath, "--truth", capture.TruthPath, "--motion", motion,
-                        "--seconds", seconds.ToString(System.Globalization.CultureInfo.InvariantCulture),
-                        "--seed", seed.ToString(), "--world", world, "--noise", "realistic");
+            var args = new List<string>
+            {
+                "synth", "--out", capture.CapturePath, "--truth", capture.TruthPath, "--motion", motion,
+                "--seconds", seconds.ToString(System.Globalization.CultureInfo.InvariantCulture),
+                "--seed", seed.ToString(), "--world", world, "--noise", "realistic",
+            };
+            if (sensors != null) args.AddRange(new[] { "--sensors", sensors });
+            RunMocapctl(args.ToArray());
             Captures[key] = capture;
             return capture;
         }
