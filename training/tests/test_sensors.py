@@ -194,3 +194,20 @@ def test_node_ids_keep_default_nodes_and_give_others_the_lowest_free_ones():
     assert se.node_ids() == [0, 1, 2, 3, 4, 5]
     assert se.node_ids(WITH_CHEST) == [0, 1, 2, 3, 4, 5, 6]
     assert se.node_ids(("chest", "head", "pelvis")) == [1, 5, 0]
+
+
+def test_evaluation_refuses_to_feed_a_model_other_sensors_than_it_reads():
+    from training import evaluate as ev
+    m = procedural.make_motion("walk", 0.5, seed=1)
+    chest_clip = ev.synthesize_clip(m, np.random.default_rng(0), sensors=WITH_CHEST)
+    assert chest_clip.sensors == WITH_CHEST and chest_clip.imu_orientation.shape[1] == 7
+    six = PoseNet(SMALL).eval()
+    with pytest.raises(UsageError, match="PyTorch network reads the sensors pelvis,.*,head; clip"):
+        ev.predict_torch(six, [chest_clip])
+    with pytest.raises(UsageError, match="model contract 1.*chest"):
+        ev.predict_onnx("any.onnx", [chest_clip])
+    # the baseline follows the clip's own list: the chest sensor lands on spine3
+    pred = ev.predict_baseline(chest_clip)
+    pelvis = chest_clip.imu_orientation[:, 0].astype(np.float64)
+    np.testing.assert_allclose(pred.local_rot[:, 9], np.swapaxes(pelvis, -1, -2) @ chest_clip.imu_orientation[:, 6],
+                               atol=1e-6)
