@@ -120,3 +120,15 @@ namespace UnityEngine
         Mouse0 = 323, Mouse1 = 324, Mouse2 = 325,
     }
 }
+
+namespace UnityEngine
+{
+    public static partial class JsonUtility
+    {
+        public static string ToJson(object obj) => throw null;
+        public static string ToJson(object obj, bool prettyPrint) => throw null;
+        public static T FromJson<T>(string json) => throw null;
+        public static object FromJson(string json, System.Type type) => throw null;
+        public static void FromJsonOverwrite(string json, object objectToOverwrite) => throw null;
+    }
+}

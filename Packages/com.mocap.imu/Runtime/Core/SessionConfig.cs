@@ -4,7 +4,6 @@ using System.Collections.Generic;
 namespace Mocap.Imu
 {
     /// <summary>One sensor of a session's sensor set: the segment it rides on and the HiPNUC node it sends as.</summary>
-    [Serializable]
     public readonly struct SessionSensor : IEquatable<SessionSensor>
     {
         public SessionSensor(MocapSegment segment, int nodeId, bool optional = false)
