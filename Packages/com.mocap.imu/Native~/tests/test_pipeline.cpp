@@ -14,6 +14,8 @@ extern "C" {
 
 namespace {
 
+constexpr int kSensors = 6; // the default set, sensor i on segment i
+
 struct PipelineRun {
     std::unique_ptr<pipeline> p{new pipeline()};
     std::vector<mocap_frame> frames;
@@ -33,10 +35,12 @@ mocap_session_config default_config()
 
 // Feeds a generated stream through one pipeline, running the two calibration steps inside the
 // prelude windows (their middle, leaving 0.5 s at each edge) the way mocapctl replay does.
+// `session`: the session's config (sensor set ...), default_config() when NULL.
 void run_stream(const synth_config &cfg, const std::vector<GeneratedPacket> &packets, PipelineRun &run,
-                double tpose_window_start = -1.0, size_t chunk = 0)
+                double tpose_window_start = -1.0, size_t chunk = 0,
+                const mocap_session_config *session = nullptr)
 {
-    mocap_session_config config = default_config();
+    mocap_session_config config = session ? *session : default_config();
     config.world_frame = cfg.world_frame;
     pipeline_init(run.p.get(), &config, on_frame, &run);
     double t0 = synth_session_time(&cfg, 0.0);
@@ -103,7 +107,7 @@ TEST(Pipeline, RecoversBoneOrientationsExactlyWithoutNoiseInBothWorldFrames)
         ASSERT_EQ(run.heading_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.heading_report.reason;
         ASSERT_EQ(run.tpose_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.tpose_report.reason;
         ErrorStats stats = score(cfg, packets, run);
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        for (int s = 0; s < kSensors; ++s) {
             SCOPED_TRACE(std::string(mocap_segment_name(s)) + (world ? " ENU" : " NWU"));
             ASSERT_GT(stats.count(s), 600u);  // ~12 s of motion at 60 Hz
             EXPECT_LT(stats.mean(s), 0.05);
@@ -126,7 +130,7 @@ TEST(Pipeline, RecoversBoneOrientationsWithRealisticNoise)
     run_stream(cfg, packets, run);
     ASSERT_EQ(run.tpose_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.tpose_report.reason;
     ErrorStats stats = score(cfg, packets, run);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (int s = 0; s < kSensors; ++s) {
         SCOPED_TRACE(mocap_segment_name(s));
         ASSERT_GT(stats.count(s), 600u);
         EXPECT_LT(stats.mean(s), 1.0);
@@ -151,7 +155,7 @@ TEST(Pipeline, OutputDoesNotDependOnWorldConvention)
     ASSERT_EQ(runs[0].frames.size(), runs[1].frames.size());
     double worst = 0;
     for (size_t i = 0; i < runs[0].frames.size(); ++i) {
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        for (int s = 0; s < kSensors; ++s) {
             const float *a = runs[0].frames[i].sensors[s].bone_orientation;
             const float *b = runs[1].frames[i].sensors[s].bone_orientation;
             double qa[4] = {a[0], a[1], a[2], a[3]}, qb[4] = {b[0], b[1], b[2], b[3]};
@@ -182,7 +186,7 @@ TEST(Pipeline, SurvivesCorruptedBytesAndDroppedNodes)
         ASSERT_EQ(run.frames[i].sequence, run.frames[i - 1].sequence + 1);
     EXPECT_GT(run.p->decoder.stats.crc_failures, 0u);
     ErrorStats stats = score(cfg, packets, run);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (int s = 0; s < kSensors; ++s) {
         SCOPED_TRACE(mocap_segment_name(s));
         EXPECT_LT(stats.mean(s), 1.0);
     }
@@ -260,7 +264,7 @@ TEST(Pipeline, AQueuedStepStartsAfterTheOneBeforeAndKeepsItsDuration)
     // The step's report followed it while it collected (each packet is one 100 Hz sample).
     EXPECT_GT(collecting_reports, 100);
     // A whole second at 60 Hz, not the half second left of its scheduled window.
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) EXPECT_GE(second.sensors[s].samples, 58u) << s;
+    for (int s = 0; s < kSensors; ++s) EXPECT_GE(second.sensors[s].samples, 58u) << s;
 }
 
 // Older chained firmware sends no sensor time: the samples of one read share its receive time.
@@ -280,7 +284,7 @@ TEST(Pipeline, TimedSamplesDeliveredFasterThanRealTimeAreAllKept)
     std::vector<uint8_t> bytes;
     for (size_t i = 0; i < packets.size(); ++i) {
         bytes.insert(bytes.end(), packets[i].bytes.begin(), packets[i].bytes.end());
-        samples += MOCAP_SENSOR_COUNT;
+        samples += kSensors;
         if (bytes.size() && (i % 10 == 9 || i + 1 == packets.size())) {
             pipeline_feed(run.p.get(), bytes.data(), bytes.size(), receive_ns);
             bytes.clear();
@@ -304,7 +308,7 @@ TEST(Pipeline, SamplesWithoutSensorTimeInOneReadAreAllKept)
     for (int read = 0; read < 20; ++read, receive_ns += 30000000LL) {
         std::vector<uint8_t> bytes;
         for (int k = 0; k < 3; ++k) {          // three samples of each sensor in this read
-            for (uint8_t node = 0; node < MOCAP_SENSOR_COUNT; ++node) {
+            for (uint8_t node = 0; node < kSensors; ++node) {
                 uint8_t payload[2 + 1 + 16] = {HIPNUC_TAG_ID, node, HIPNUC_TAG_QUAT};
                 const float q[4] = {1.0f, 0.0f, 0.0f, 0.0f};
                 std::memcpy(payload + 3, q, sizeof q);
@@ -316,8 +320,159 @@ TEST(Pipeline, SamplesWithoutSensorTimeInOneReadAreAllKept)
         }
         pipeline_feed(run.p.get(), bytes.data(), bytes.size(), receive_ns);
     }
-    EXPECT_EQ(run.p->counters.samples_decoded, 20u * 3u * MOCAP_SENSOR_COUNT);
+    EXPECT_EQ(run.p->counters.samples_decoded, 20u * 3u * kSensors);
     EXPECT_EQ(run.p->counters.samples_rejected, 0u);
     EXPECT_EQ(run.p->assembler.out_of_order, 0u);
     EXPECT_GT(run.frames.size(), 20u);  // 0.6 s at 60 Hz, less the hold at the end
+}
+
+namespace {
+
+// The default set plus a chest sensor on node 6, in the generator and in the session.
+synth_config seven_sensor_capture(uint64_t seed, int world)
+{
+    synth_config cfg = base_config(seed, world);
+    cfg.sensor_count = 7;
+    cfg.segments[6] = MOCAP_SEGMENT_CHEST;
+    cfg.node_ids[6] = 6;
+    return cfg;
+}
+
+mocap_session_config seven_sensor_session(uint32_t optional_mask = 0)
+{
+    mocap_session_config c = default_config();
+    c.sensor_count = 7;
+    c.sensor_segments[6] = MOCAP_SEGMENT_CHEST;
+    c.node_ids[6] = 6;
+    c.optional_mask = optional_mask;
+    return c;
+}
+
+}  // namespace
+
+// Seven sensors, the chest on node 6: both calibration steps accept every sensor, the chest
+// included, and its bone follows the generator's chest truth within the six-sensor bounds (noise
+// free: mean 0.05 deg, max 0.3 deg). Frames list the sensors in config order, each with its
+// segment, node and state.
+TEST(Pipeline, SevenSensorsWithAChestCalibrateAndTrack)
+{
+    for (int world : {MOCAP_WORLD_NWU, MOCAP_WORLD_ENU}) {
+        synth_config cfg = seven_sensor_capture(21, world);
+        auto packets = generate(cfg);
+        ASSERT_GT(packets.size(), 1500u);
+        const mocap_session_config session = seven_sensor_session();
+        PipelineRun run;
+        run_stream(cfg, packets, run, -1.0, 0, &session);
+        ASSERT_EQ(run.heading_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.heading_report.reason;
+        ASSERT_EQ(run.tpose_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.tpose_report.reason;
+        ASSERT_EQ(run.tpose_report.sensor_count, 7u);
+        for (int s = 0; s < 7; ++s) {
+            EXPECT_EQ(run.tpose_report.sensors[s].segment, session.sensor_segments[s]);
+            EXPECT_TRUE(run.tpose_report.sensors[s].ok) << s;
+            EXPECT_FALSE(run.tpose_report.sensors[s].left_out) << s;
+        }
+        EXPECT_EQ(run.p->calibration.valid_mask, 0x7Fu);
+        EXPECT_EQ(run.p->calibration.sensor_count, 7u);
+        EXPECT_EQ(run.p->calibration.segments[6], MOCAP_SEGMENT_CHEST);
+
+        ErrorStats stats = score(cfg, packets, run);
+        for (int s = 0; s < 7; ++s) {
+            SCOPED_TRACE(std::string(mocap_segment_name(session.sensor_segments[s])) + (world ? " ENU" : " NWU"));
+            ASSERT_GT(stats.count(s), 600u);
+            EXPECT_LT(stats.mean(s), 0.05);
+            EXPECT_LT(stats.max(s), 0.3);
+        }
+        // The chest is scored against its own truth: against the pelvis's it would be off.
+        TruthTrack truth(cfg, packets);
+        double chest_vs_pelvis = 0;
+        size_t calibrated = 0;
+        for (const mocap_frame &f : run.frames) {
+            ASSERT_EQ(f.sensor_count, 7u);
+            for (int s = 0; s < 7; ++s) {
+                EXPECT_EQ(f.sensors[s].segment, session.sensor_segments[s]);
+                EXPECT_EQ(f.sensors[s].node_id, (uint32_t)session.node_ids[s]);
+            }
+            for (int s = 7; s < MOCAP_MAX_SENSORS; ++s) EXPECT_EQ(f.sensors[s].flags, 0u);
+            if (!(f.flags & MOCAP_FRAME_CALIBRATED)) continue;
+            ++calibrated;
+            if (f.fresh_mask & (1u << 6)) { EXPECT_EQ(f.sensors[6].state, MOCAP_SENSOR_FRESH); }
+            EXPECT_TRUE(f.sensors[6].flags & MOCAP_SENSOR_CALIBRATED);
+            synth_pose pose;
+            int phase = -1;
+            if (!truth.at(f.time_s, pose, phase) || phase != 3) continue;
+            const float *q = f.sensors[6].bone_orientation;
+            double qd[4] = {q[0], q[1], q[2], q[3]};
+            chest_vs_pelvis = std::max(chest_vs_pelvis, quat_angle_deg(qd, pose.bone_quat[MOCAP_SEGMENT_PELVIS]));
+        }
+        EXPECT_GT(calibrated, 600u);
+        EXPECT_GT(chest_vs_pelvis, 3.0);
+    }
+}
+
+// The same with realistic noise: the six-sensor bounds (mean 1 deg, max 3.5 deg) hold for the chest.
+TEST(Pipeline, SevenSensorsWithAChestWithRealisticNoise)
+{
+    synth_config cfg = seven_sensor_capture(22, MOCAP_WORLD_ENU);
+    add_realistic_noise(cfg);
+    auto packets = generate(cfg);
+    const mocap_session_config session = seven_sensor_session();
+    PipelineRun run;
+    run_stream(cfg, packets, run, -1.0, 0, &session);
+    ASSERT_EQ(run.tpose_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.tpose_report.reason;
+    ErrorStats stats = score(cfg, packets, run);
+    for (int s = 0; s < 7; ++s) {
+        SCOPED_TRACE(mocap_segment_name(session.sensor_segments[s]));
+        ASSERT_GT(stats.count(s), 600u);
+        EXPECT_LT(stats.mean(s), 1.0);
+        EXPECT_LT(stats.max(s), 3.5);
+        EXPECT_LT(stats.acc_rms(s), 0.35 * stats.acc_truth_rms(s) + 0.3);
+    }
+}
+
+// The chest configured but silent (the capture has no node 6). Optional: both steps accept the
+// six and leave the chest out, frames are MOCAP_FRAME_CALIBRATED and the chest ABSENT. Required:
+// the heading step is refused naming the chest, and nothing is calibrated.
+TEST(Pipeline, ASilentChestIsLeftOutWhenOptionalAndRefusedWhenRequired)
+{
+    synth_config cfg = base_config(23, MOCAP_WORLD_NWU); // six sensors sending
+    cfg.motion_s = 4.0;
+    auto packets = generate(cfg);
+    {
+        const mocap_session_config session = seven_sensor_session(1u << 6);
+        PipelineRun run;
+        run_stream(cfg, packets, run, -1.0, 0, &session);
+        ASSERT_EQ(run.heading_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.heading_report.reason;
+        ASSERT_EQ(run.tpose_report.state, MOCAP_CALIBRATION_ACCEPTED) << run.tpose_report.reason;
+        for (const mocap_calibration_report *rep : {&run.heading_report, &run.tpose_report}) {
+            ASSERT_EQ(rep->sensor_count, 7u);
+            EXPECT_EQ(rep->sensors[6].segment, MOCAP_SEGMENT_CHEST);
+            EXPECT_EQ(rep->sensors[6].left_out, 1);
+            for (int s = 0; s < 6; ++s) {
+                EXPECT_EQ(rep->sensors[s].left_out, 0) << s;
+                EXPECT_TRUE(rep->sensors[s].ok) << s;
+            }
+        }
+        EXPECT_EQ(run.p->calibration.valid_mask, 0x3Fu);
+        ASSERT_FALSE(run.frames.empty());
+        const mocap_frame &last = run.frames.back();
+        EXPECT_TRUE(last.flags & MOCAP_FRAME_CALIBRATED);
+        EXPECT_EQ(last.sensor_count, 7u);
+        EXPECT_EQ(last.sensors[6].segment, MOCAP_SEGMENT_CHEST);
+        EXPECT_EQ(last.sensors[6].state, MOCAP_SENSOR_ABSENT);
+        EXPECT_FALSE(last.sensors[6].flags & (MOCAP_SENSOR_VALID | MOCAP_SENSOR_CALIBRATED));
+        ErrorStats stats = score(cfg, packets, run);
+        EXPECT_EQ(stats.count(6), 0u);
+        for (int s = 0; s < 6; ++s) EXPECT_GT(stats.count(s), 100u) << s;
+    }
+    {
+        const mocap_session_config session = seven_sensor_session(0);
+        PipelineRun run;
+        run_stream(cfg, packets, run, -1.0, 0, &session);
+        EXPECT_EQ(run.heading_report.state, MOCAP_CALIBRATION_REFUSED);
+        EXPECT_NE(std::string(run.heading_report.reason).find("chest"), std::string::npos)
+            << run.heading_report.reason;
+        EXPECT_EQ(run.p->calibration.heading_mask, 0u);
+        EXPECT_EQ(run.p->calibration.valid_mask, 0u);
+        for (const auto &f : run.frames) ASSERT_FALSE(f.flags & MOCAP_FRAME_CALIBRATED);
+    }
 }

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <random>
@@ -23,6 +24,11 @@
 #include "test_support.h"
 
 namespace {
+
+// The default sensor set: six sensors, sensor i on segment i.
+constexpr int kSensors = 6;
+// Every segment of the table (the built-in motions move them all; the chest is the seventh).
+constexpr int kSegments = 7;
 
 using Bytes = std::vector<uint8_t>;
 constexpr double kG = MOCAP_STANDARD_GRAVITY;
@@ -109,8 +115,8 @@ synth_config short_config()
     cfg.strap_s = 1.0;
     cfg.tpose_s = 1.0;
     cfg.motion_s = 4.0;
-    const int ids[MOCAP_SENSOR_COUNT] = {7, 3, 12, 40, 41, 200};
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) cfg.node_ids[i] = ids[i];
+    const int ids[kSensors] = {7, 3, 12, 40, 41, 200};
+    for (int i = 0; i < kSensors; i++) cfg.node_ids[i] = ids[i];
     cfg.gateway_id = 9;
     return cfg;
 }
@@ -244,7 +250,7 @@ TEST(Synth, StreamDecodesToEveryPacketWithTheConfiguredNodes)
         EXPECT_EQ(p.info.offset, offset);
         EXPECT_EQ(p.info.length, p.bytes.size());
         EXPECT_EQ(p.info.length, HIPNUC_HEADER_SIZE + HIPNUC_GWSOL_HEADER_SIZE +
-                                     MOCAP_SENSOR_COUNT * HIPNUC_IMUSOL_SIZE);
+                                     kSensors * HIPNUC_IMUSOL_SIZE);
         EXPECT_EQ(p.info.intact, 1);
         EXPECT_EQ(p.info.dropped, 0);
         EXPECT_EQ(p.info.node_mask, 0x3Fu);
@@ -258,7 +264,7 @@ TEST(Synth, StreamDecodesToEveryPacketWithTheConfiguredNodes)
         EXPECT_EQ(f.gateway_id, 9);
         ASSERT_EQ(f.samples.size(), 6u);
         uint32_t expect_ms = cfg.start_sensor_ms + (uint32_t)(k * 10);
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSensors; i++) {
             EXPECT_EQ(f.samples[i].node_id, (uint32_t)cfg.node_ids[i]);
             EXPECT_EQ(f.samples[i].time_ms, expect_ms);
         }
@@ -275,7 +281,7 @@ void check_decoded_against_truth(double tremor_deg)
     cfg.motion_s = 30.0; // the whole mixed motion
     cfg.still_tremor_deg = tremor_deg;
     Stream s = generate(cfg);
-    double w2m[6][9], s2b[6][9], a[9];
+    double w2m[MOCAP_MAX_SENSORS][9], s2b[MOCAP_MAX_SENSORS][9], a[9];
     synth_setup_rotations(&cfg, w2m, s2b);
     mocap_world_zup_to_model(a);
     Mat heading;
@@ -290,7 +296,7 @@ void check_decoded_against_truth(double tremor_deg)
     for (size_t k = 0; k < s.packets.size(); k++) {
         const Packet &p = s.packets[k];
         phases_seen |= 1 << p.info.phase;
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSensors; i++) {
             const hipnuc_sample &smp = d.frames[k].samples[i];
             ModelSample m = to_model(smp, w2m[i], s2b[i]);
             // Euler angles and magnetic field are consistent with the quaternion.
@@ -350,12 +356,13 @@ TEST(Synth, NwuAndEnuGiveTheSameModelFrameTruth)
     synth_config enu = nwu;
     enu.world_frame = MOCAP_WORLD_ENU;
 
-    double w2m_n[6][9], w2m_e[6][9], s2b_n[6][9], s2b_e[6][9];
+    double w2m_n[MOCAP_MAX_SENSORS][9], w2m_e[MOCAP_MAX_SENSORS][9];
+    double s2b_n[MOCAP_MAX_SENSORS][9], s2b_e[MOCAP_MAX_SENSORS][9];
     synth_setup_rotations(&nwu, w2m_n, s2b_n);
     synth_setup_rotations(&enu, w2m_e, s2b_e);
     const double fwd[3] = {0, 0, 1}, up[3] = {0, 1, 0};
     const double s30 = std::sin(30 * MOCAP_DEG2RAD), c30 = std::cos(30 * MOCAP_DEG2RAD);
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+    for (int i = 0; i < kSensors; i++) {
         Mat wn, we;
         mat3_transpose(wn.m, w2m_n[i]);
         mat3_transpose(we.m, w2m_e[i]);
@@ -385,7 +392,7 @@ TEST(Synth, NwuAndEnuGiveTheSameModelFrameTruth)
     ASSERT_EQ(dn.frames.size(), sn.packets.size());
     ASSERT_EQ(de.frames.size(), se.packets.size());
     for (size_t k = 0; k < sn.packets.size(); k++) {
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSensors; i++) {
             for (int c = 0; c < 4; c++)
                 ASSERT_EQ(sn.packets[k].truth.bone_quat[i][c], se.packets[k].truth.bone_quat[i][c]);
             ModelSample a = to_model(dn.frames[k].samples[i], w2m_n[i], s2b_n[i]);
@@ -413,27 +420,28 @@ TEST(Synth, SameSeedSameBytesOtherSeedOtherSetup)
     other.seed = cfg.seed + 1;
     Stream c = generate(other);
     EXPECT_NE(a.bytes, c.bytes);
-    double s2b_a[6][9], s2b_c[6][9], w2m_a[6][9], w2m_c[6][9];
+    double s2b_a[MOCAP_MAX_SENSORS][9], s2b_c[MOCAP_MAX_SENSORS][9];
+    double w2m_a[MOCAP_MAX_SENSORS][9], w2m_c[MOCAP_MAX_SENSORS][9];
     synth_setup_rotations(&cfg, w2m_a, s2b_a);
     synth_setup_rotations(&other, w2m_c, s2b_c);
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+    for (int i = 0; i < kSensors; i++) {
         EXPECT_GT(mat3_angle_deg(s2b_a[i], s2b_c[i]), 1.0) << "segment " << i;
         EXPECT_GT(mat3_angle_deg(w2m_a[i], w2m_c[i]), 0.01) << "segment " << i;
     }
     // Noise settings use their own random stream: the setup does not move with them.
     synth_config quiet = cfg;
     quiet.acc_noise_g = quiet.gyr_noise_dps = quiet.quat_noise_deg = 0.0;
-    double s2b_q[6][9];
+    double s2b_q[MOCAP_MAX_SENSORS][9];
     synth_setup_rotations(&quiet, nullptr, s2b_q);
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++)
+    for (int i = 0; i < kSensors; i++)
         for (int k = 0; k < 9; k++) EXPECT_EQ(s2b_q[i][k], s2b_a[i][k]);
 
     synth_config fixed = cfg;
     fixed.random_mounting = 0;
-    double s2b_f[6][9], id[9];
+    double s2b_f[MOCAP_MAX_SENSORS][9], id[9];
     mat3_identity(id);
     synth_setup_rotations(&fixed, nullptr, s2b_f);
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) EXPECT_LT(mat3_angle_deg(s2b_f[i], id), 1e-9);
+    for (int i = 0; i < kSensors; i++) EXPECT_LT(mat3_angle_deg(s2b_f[i], id), 1e-9);
 }
 
 TEST(Synth, NodeAndPacketDropoutsAreReportedAndDecodedAsSuch)
@@ -449,7 +457,7 @@ TEST(Synth, NodeAndPacketDropoutsAreReportedAndDecodedAsSuch)
         ASSERT_EQ(d.frames[k].samples.size(), (size_t)popcount(mask));
         five += popcount(mask) == 5;
         size_t j = 0;
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++)
+        for (int i = 0; i < kSensors; i++)
             if (mask & (1u << i)) { EXPECT_EQ(d.frames[k].samples[j++].node_id, (uint32_t)cfg.node_ids[i]); }
     }
     EXPECT_GT(five, 100); // ~35% of 801 packets miss exactly one node
@@ -512,7 +520,7 @@ TEST(SynthMotions, StartAndEndInTPoseAtRest)
         ASSERT_EQ(fn(nullptr, end, &p1), 0);
         EXPECT_EQ(fn(nullptr, end + 0.01, &past), -1);
         const double id[4] = {1, 0, 0, 0};
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSegments; i++) {
             for (const synth_pose *p : {&p0, &p1}) {
                 EXPECT_LT(quat_angle_deg(p->bone_quat[i], id), 1e-6) << name << " segment " << i;
                 EXPECT_LT(norm3(p->accel[i]), 1e-9) << name;
@@ -535,7 +543,7 @@ TEST(SynthMotions, AngularVelocityIsTheDerivativeOfOrientation)
             ASSERT_EQ(fn(nullptr, t - h, &a), 0);
             ASSERT_EQ(fn(nullptr, t, &b), 0);
             ASSERT_EQ(fn(nullptr, t + h, &c), 0);
-            for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+            for (int i = 0; i < kSegments; i++) {
                 double w[3];
                 fd_omega(w, a.bone_quat[i], c.bone_quat[i], 2 * h);
                 double scale = 1.0 + norm3(b.angular_velocity[i]);
@@ -561,7 +569,7 @@ TEST(SynthMotions, AccelerationsIntegrateToOneRigidDisplacement)
         double end = motion_duration(fn);
         const int n = 2 * (int)std::ceil(end / 0.002);
         const double h = end / n;
-        double vel[2][6][3] = {}, disp[2][6][3] = {}, prev[6][3] = {};
+        double vel[2][kSegments][3] = {}, disp[2][kSegments][3] = {}, prev[kSegments][3] = {};
         double max_jump = 0, peak = 0;
         for (int k = 0; k <= n; k++) {
             double t = k * h;
@@ -569,7 +577,7 @@ TEST(SynthMotions, AccelerationsIntegrateToOneRigidDisplacement)
             double w2 = (k % 2) ? 0.0 : 2.0 * w1;
             synth_pose p;
             ASSERT_EQ(fn(nullptr, t, &p), 0);
-            for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+            for (int i = 0; i < kSegments; i++) {
                 for (int c = 0; c < 3; c++) {
                     ASSERT_TRUE(std::isfinite(p.accel[i][c]));
                     vel[0][i][c] += w1 * p.accel[i][c];
@@ -582,8 +590,8 @@ TEST(SynthMotions, AccelerationsIntegrateToOneRigidDisplacement)
                 std::memcpy(prev[i], p.accel[i], sizeof prev[i]);
             }
         }
-        double v[6][3], d[6][3];
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++)
+        double v[kSegments][3], d[kSegments][3];
+        for (int i = 0; i < kSegments; i++)
             for (int c = 0; c < 3; c++) {
                 v[i][c] = (4.0 * vel[0][i][c] - vel[1][i][c]) / 3.0;
                 d[i][c] = (4.0 * disp[0][i][c] - disp[1][i][c]) / 3.0;
@@ -592,7 +600,7 @@ TEST(SynthMotions, AccelerationsIntegrateToOneRigidDisplacement)
         EXPECT_LT(peak, 60.0) << name;
         // Smooth: over 1 ms no sensor's acceleration changes by more than 0.5 m/s^2 (500 m/s^3).
         EXPECT_LT(max_jump, 0.5) << name;
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSegments; i++) {
             EXPECT_LT(norm3(v[i]), 1e-6) << name << " segment " << i;
             EXPECT_LT(dist3(d[i], d[0]), 1e-5) << name << " segment " << i;
             EXPECT_NEAR(d[i][1], 0.0, 1e-5) << name << " segment " << i;
@@ -610,17 +618,17 @@ TEST(SynthMotions, WalkVerticalAccelerationHasZeroMeanOverACycle)
     // 1 / 0.9 s (checked below: the pose repeats one stride later).
     const double t0 = 1.5, cycle = 1.0 / 0.9;
     const int n = 2000;
-    double sum[6] = {}, sq[6] = {};
+    double sum[kSegments] = {}, sq[kSegments] = {};
     for (int k = 0; k <= n; k++) {
         synth_pose p;
         double t = t0 + cycle * k / n, wgt = (k == 0 || k == n) ? 0.5 : 1.0;
         ASSERT_EQ(fn(nullptr, t, &p), 0);
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSegments; i++) {
             sum[i] += wgt * p.accel[i][1] / n;
             sq[i] += wgt * p.accel[i][1] * p.accel[i][1] / n;
         }
     }
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+    for (int i = 0; i < kSegments; i++) {
         EXPECT_NEAR(sum[i], 0.0, 1e-6) << "segment " << i;
         EXPECT_GT(std::sqrt(sq[i]), 0.1) << "segment " << i; // there is vertical motion
     }
@@ -628,7 +636,7 @@ TEST(SynthMotions, WalkVerticalAccelerationHasZeroMeanOverACycle)
     synth_pose a, b;
     fn(nullptr, 2.0, &a);
     fn(nullptr, 2.0 + cycle, &b);
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+    for (int i = 0; i < kSegments; i++) {
         EXPECT_LT(quat_angle_deg(a.bone_quat[i], b.bone_quat[i]), 1e-6);
         EXPECT_LT(dist3(a.accel[i], b.accel[i]), 1e-9);
     }
@@ -650,7 +658,7 @@ void write_trajectory(const std::string &path, synth_motion_fn fn, double rate, 
         fn(nullptr, t, &p);
         std::snprintf(buf, sizeof buf, "%.17g", t + t_offset);
         out << buf;
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSensors; i++) {
             for (int c = 0; c < 4; c++) { std::snprintf(buf, sizeof buf, " %.17g", p.bone_quat[i][c]); out << buf; }
             for (int c = 0; c < 3; c++) { std::snprintf(buf, sizeof buf, "\t%.17g", p.accel[i][c]); out << buf; }
         }
@@ -678,7 +686,7 @@ TEST(SynthTrajectory, RoundTripsTheProceduralMotion)
             synth_pose want, got;
             ASSERT_EQ(walk(nullptr, t, &want), 0);
             ASSERT_EQ(synth_trajectory_motion(traj, t, &got), 0);
-            for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+            for (int i = 0; i < kSensors; i++) {
                 double qa = quat_angle_deg(want.bone_quat[i], got.bone_quat[i]);
                 double ae = dist3(want.accel[i], got.accel[i]);
                 if (frac == 0.0) {
@@ -729,7 +737,7 @@ std::string traj_line(double t, double qw = 1.0)
 {
     std::ostringstream s;
     s << t;
-    for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) s << " " << qw << " 0 0 0 0.1 0.2 0.3";
+    for (int i = 0; i < kSensors; i++) s << " " << qw << " 0 0 0 0.1 0.2 0.3";
     return s.str() + "\n";
 }
 
@@ -802,12 +810,12 @@ TEST(Synth, WritesACaptureAndATruthCsv)
         std::stringstream ss(line);
         std::string cell;
         while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
-        ASSERT_EQ(v.size(), 2u + 7u * MOCAP_SENSOR_COUNT);
+        ASSERT_EQ(v.size(), 2u + 7u * kSensors);
         ASSERT_LT(rows, s.packets.size());
         const Packet &p = s.packets[rows];
         EXPECT_NEAR(v[0], synth_session_time(&cfg, p.info.t), 1e-8);
         EXPECT_EQ(v[1], p.info.phase);
-        for (int i = 0; i < MOCAP_SENSOR_COUNT; i++) {
+        for (int i = 0; i < kSensors; i++) {
             for (int c = 0; c < 4; c++) EXPECT_NEAR(v[2 + 7 * i + c], p.truth.bone_quat[i][c], 1e-8);
             for (int c = 0; c < 3; c++)
                 EXPECT_NEAR(v[6 + 7 * i + c], p.truth.accel[i][c], 1e-8 * (1 + std::fabs(p.truth.accel[i][c])));
@@ -918,6 +926,227 @@ TEST(SynthAcceptance, OnePercentCorruptedBytesEveryIntactFrameDecoded)
     EXPECT_GT(corrupted_with_valid_header, corrupted / 2);
     RecordProperty("intact_frames", (int)intact);
     RecordProperty("crc_failures", std::to_string(d.stats.crc_failures));
+}
+
+// ------------------------------------------------------------------------------------------
+// Sensor sets
+
+// The default set plus a chest sensor on node 6.
+synth_config seven_sensor_config()
+{
+    synth_config cfg = short_config();
+    cfg.sensor_count = 7;
+    cfg.segments[6] = MOCAP_SEGMENT_CHEST;
+    cfg.node_ids[6] = 6;
+    return cfg;
+}
+
+TEST(SynthSensorSet, DefaultsAreTheEngineDefaultSet)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    mocap_session_config engine;
+    mocap_config_defaults(&engine);
+    ASSERT_EQ(cfg.sensor_count, engine.sensor_count);
+    EXPECT_EQ(cfg.sensor_count, 6u);
+    for (uint32_t i = 0; i < cfg.sensor_count; i++) {
+        EXPECT_EQ(cfg.segments[i], engine.sensor_segments[i]) << i;
+        EXPECT_EQ(cfg.node_ids[i], engine.node_ids[i]) << i;
+    }
+}
+
+// A chest on node 6: seven blocks per packet in config order, and the chest's sample is its own
+// bone's motion (not the pelvis's) through its own setup rotations, while the six others keep the
+// setup draws they have without it.
+TEST(SynthSensorSet, SevenSensorsCarryTheChestInConfigOrder)
+{
+    synth_config cfg = seven_sensor_config();
+    cfg.motion_s = 30.0;
+    Stream s = generate(cfg);
+    ASSERT_FALSE(s.packets.empty());
+    DecodeResult d = decode(s.bytes, 3);
+    ASSERT_EQ(d.frames.size(), s.packets.size());
+    double w2m[MOCAP_MAX_SENSORS][9], s2b[MOCAP_MAX_SENSORS][9];
+    double w2m6[MOCAP_MAX_SENSORS][9], s2b6[MOCAP_MAX_SENSORS][9];
+    synth_setup_rotations(&cfg, w2m, s2b);
+    synth_config six = short_config();
+    synth_setup_rotations(&six, w2m6, s2b6);
+    for (int i = 0; i < kSensors; i++)
+        for (int k = 0; k < 9; k++) {
+            EXPECT_EQ(w2m[i][k], w2m6[i][k]) << "sensor " << i;
+            EXPECT_EQ(s2b[i][k], s2b6[i][k]) << "sensor " << i;
+        }
+    EXPECT_GT(mat3_angle_deg(s2b[6], s2b[0]), 1.0); // the chest has a mounting of its own
+
+    double worst_chest = 0, chest_vs_pelvis = 0;
+    for (size_t k = 0; k < s.packets.size(); k++) {
+        const Packet &p = s.packets[k];
+        EXPECT_EQ(p.info.node_mask, 0x7Fu);
+        EXPECT_EQ(p.info.length, HIPNUC_HEADER_SIZE + HIPNUC_GWSOL_HEADER_SIZE + 7 * HIPNUC_IMUSOL_SIZE);
+        ASSERT_EQ(d.frames[k].samples.size(), 7u);
+        for (int i = 0; i < 7; i++) EXPECT_EQ(d.frames[k].samples[i].node_id, (uint32_t)cfg.node_ids[i]);
+        EXPECT_NE(p.truth.segment_mask & (1u << MOCAP_SEGMENT_CHEST), 0u);
+        // Strapped on (T-pose and motion), the sensor reports its bone through its mounting.
+        ModelSample chest = to_model(d.frames[k].samples[6], w2m[6], s2b[6]);
+        if (p.info.phase >= 2)
+            worst_chest = std::max(worst_chest, mat_angle_to_quat_deg(chest.model_bone,
+                                                                      p.truth.bone_quat[MOCAP_SEGMENT_CHEST]));
+        if (p.info.phase == 3)
+            chest_vs_pelvis = std::max(chest_vs_pelvis, quat_angle_deg(p.truth.bone_quat[MOCAP_SEGMENT_CHEST],
+                                                                       p.truth.bone_quat[MOCAP_SEGMENT_PELVIS]));
+    }
+    EXPECT_LT(worst_chest, 1e-3); // float rounding of the encoded quaternion only
+    EXPECT_GT(chest_vs_pelvis, 5.0);  // it articulates on the spine
+    EXPECT_LT(chest_vs_pelvis, 40.0); // a little, as a chest does
+}
+
+// The chest moves relative to the pelvis in each built-in motion, as an upper trunk would: a few
+// degrees of twist or bend, never a tumble.
+TEST(SynthMotions, ChestArticulatesOnThePelvis)
+{
+    for (const char *name : {"walk", "arms", "squat", "turn"}) {
+        synth_motion_fn fn = synth_builtin_motion(name);
+        double end = motion_duration(fn), most = 0;
+        for (double t = 0; t < end; t += 0.02) {
+            synth_pose p;
+            ASSERT_EQ(fn(nullptr, t, &p), 0);
+            EXPECT_EQ(p.segment_mask, 0x7Fu) << name;
+            most = std::max(most, quat_angle_deg(p.bone_quat[MOCAP_SEGMENT_CHEST],
+                                                 p.bone_quat[MOCAP_SEGMENT_PELVIS]));
+        }
+        EXPECT_GT(most, 2.0) << name;
+        EXPECT_LT(most, 25.0) << name;
+    }
+}
+
+// The truth CSV has one column group per configured sensor, named by its segment, in config
+// order, and each group is that segment's truth.
+TEST(SynthSensorSet, TruthCsvCoversTheConfiguredSensors)
+{
+    synth_config cfg = short_config();
+    cfg.sensor_count = 3;
+    cfg.segments[0] = MOCAP_SEGMENT_CHEST;
+    cfg.segments[1] = MOCAP_SEGMENT_PELVIS;
+    cfg.segments[2] = MOCAP_SEGMENT_HEAD;
+    cfg.node_ids[0] = 12;
+    cfg.node_ids[1] = 7;
+    cfg.node_ids[2] = 30;
+    std::string cap = test_temp_path("three.cap"), truth = test_temp_path("three.csv");
+    ASSERT_EQ(synth_write_capture(&cfg, nullptr, nullptr, cap.c_str(), truth.c_str()), MOCAP_OK)
+        << mocap_last_error();
+    Stream s = generate(cfg);
+    std::ifstream in(truth);
+    std::string line;
+    ASSERT_TRUE(std::getline(in, line));
+    EXPECT_EQ(line, "t_session,phase,chest_qw,chest_qx,chest_qy,chest_qz,chest_ax,chest_ay,chest_az,"
+                    "pelvis_qw,pelvis_qx,pelvis_qy,pelvis_qz,pelvis_ax,pelvis_ay,pelvis_az,"
+                    "head_qw,head_qx,head_qy,head_qz,head_ax,head_ay,head_az");
+    size_t rows = 0;
+    while (std::getline(in, line)) {
+        std::vector<double> v;
+        std::stringstream ss(line);
+        std::string cell;
+        while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
+        ASSERT_EQ(v.size(), 2u + 7u * 3u);
+        ASSERT_LT(rows, s.packets.size());
+        const synth_pose &t = s.packets[rows].truth;
+        for (int i = 0; i < 3; i++)
+            for (int c = 0; c < 4; c++)
+                EXPECT_NEAR(v[2 + 7 * i + c], t.bone_quat[cfg.segments[i]][c], 1e-8) << "row " << rows;
+        rows++;
+    }
+    EXPECT_EQ(rows, s.packets.size());
+    EXPECT_EQ(s.packets.back().info.node_mask, 0x7u);
+}
+
+// A sensor with node id -1 is configured but never sends: its blocks are missing from every
+// packet, the others are all there.
+TEST(SynthSensorSet, ASilentSensorSendsNothing)
+{
+    synth_config cfg = seven_sensor_config();
+    cfg.node_ids[6] = -1;
+    Stream s = generate(cfg);
+    ASSERT_FALSE(s.packets.empty());
+    DecodeResult d = decode(s.bytes);
+    ASSERT_EQ(d.frames.size(), s.packets.size());
+    for (size_t k = 0; k < s.packets.size(); k++) {
+        EXPECT_EQ(s.packets[k].info.node_mask, 0x3Fu);
+        EXPECT_EQ(d.frames[k].samples.size(), 6u);
+    }
+}
+
+TEST(SynthSensorSet, BadSetsAreRefusedNamingTheProblem)
+{
+    struct Case {
+        std::function<void(synth_config &)> change;
+        const char *needle;
+    };
+    const Case cases[] = {
+        {[](synth_config &c) { c.sensor_count = 0; }, "sensor_count 0"},
+        {[](synth_config &c) { c.sensor_count = 17; }, "sensor_count 17"},
+        {[](synth_config &c) { c.segments[4] = MOCAP_SEGMENT_LEFT_WRIST; }, "left_wrist"},
+        {[](synth_config &c) { c.segments[2] = 7; }, "segment 7"},
+        {[](synth_config &c) { c.segments[2] = -1; }, "segment -1"},
+        {[](synth_config &c) { c.node_ids[6] = c.node_ids[0]; }, "node id 7"},
+        {[](synth_config &c) { c.node_ids[6] = 256; }, "256"},
+    };
+    for (const Case &k : cases) {
+        synth_config cfg = seven_sensor_config();
+        k.change(cfg);
+        Stream s;
+        EXPECT_EQ(synth_generate(&cfg, nullptr, nullptr, collect_packet, &s), MOCAP_ERR_INVALID_ARGUMENT)
+            << k.needle;
+        EXPECT_TRUE(s.packets.empty());
+        EXPECT_NE(std::string(mocap_last_error()).find(k.needle), std::string::npos)
+            << k.needle << ": " << mocap_last_error();
+    }
+}
+
+// A trajectory file may name its segments; a capture of sensors on segments it lacks is refused
+// naming the first one, one of its own segments works.
+TEST(SynthTrajectory, ASegmentsLineNamesTheColumns)
+{
+    std::string path = test_temp_path("two.traj");
+    {
+        std::ofstream out(path);
+        out.precision(17);
+        out << "# pelvis still, chest turning\nsegments pelvis, chest\n";
+        for (int k = 0; k <= 100; k++) {
+            double a = 0.005 * k, t = 0.01 * k;
+            out << t << "  1 0 0 0  0 0 0   " << std::cos(a) << " 0 " << std::sin(a) << " 0  0.5 0 0\n";
+        }
+    }
+    synth_trajectory *traj = nullptr;
+    ASSERT_EQ(synth_trajectory_load(path.c_str(), &traj), MOCAP_OK) << mocap_last_error();
+    std::unique_ptr<synth_trajectory, void (*)(synth_trajectory *)> guard(traj, synth_trajectory_free);
+    EXPECT_EQ(synth_trajectory_segment_mask(traj), (1u << MOCAP_SEGMENT_PELVIS) | (1u << MOCAP_SEGMENT_CHEST));
+    synth_pose p;
+    ASSERT_EQ(synth_trajectory_motion(traj, 0.5, &p), 0);
+    EXPECT_EQ(p.segment_mask, (1u << MOCAP_SEGMENT_PELVIS) | (1u << MOCAP_SEGMENT_CHEST));
+    EXPECT_NEAR(p.bone_quat[MOCAP_SEGMENT_CHEST][0], std::cos(0.25), 1e-9);
+    EXPECT_NEAR(p.bone_quat[MOCAP_SEGMENT_CHEST][2], std::sin(0.25), 1e-9);
+    EXPECT_NEAR(p.angular_velocity[MOCAP_SEGMENT_CHEST][1], 1.0, 1e-6); // 2 * 0.5 rad/s
+    EXPECT_DOUBLE_EQ(p.accel[MOCAP_SEGMENT_CHEST][0], 0.5);
+
+    synth_config six = short_config();
+    Stream none;
+    EXPECT_EQ(synth_generate(&six, synth_trajectory_motion, traj, collect_packet, &none),
+              MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(mocap_last_error()).find("left_wrist"), std::string::npos) << mocap_last_error();
+
+    synth_config two = short_config();
+    two.sensor_count = 2;
+    two.segments[1] = MOCAP_SEGMENT_CHEST;
+    Stream s = generate(two, synth_trajectory_motion, traj);
+    ASSERT_FALSE(s.packets.empty());
+    EXPECT_NEAR(quat_angle_deg(s.packets.back().truth.bone_quat[MOCAP_SEGMENT_CHEST], p.bone_quat[MOCAP_SEGMENT_PELVIS]),
+                0.5 * 2 * MOCAP_RAD2DEG, 1e-6); // 1 rad of turn at the end (identity pelvis)
+
+    std::string head = "segments pelvis chest\n0 1 0 0 0 0 0 0 1 0 0 0 0 0 0\n";
+    expect_load_error("unknown.traj", "segments pelvis spine\n", MOCAP_ERR_FORMAT, "spine");
+    expect_load_error("twice.traj", "segments chest chest\n", MOCAP_ERR_FORMAT, "chest");
+    expect_load_error("late.traj", head + "segments pelvis\n", MOCAP_ERR_FORMAT, "line 3");
+    expect_load_error("count.traj", head + "0.1 1 0 0 0 0 0 0\n", MOCAP_ERR_FORMAT, "2 segments");
 }
 
 } // namespace

@@ -97,7 +97,8 @@ TEST(TextNumber, FilesAreWrittenAndReadWithADotInACommaLocale)
 
     // A calibration file: '.' on disk, read back bit for bit.
     static mocap_calibration cal, loaded;
-    calib_identity(&cal);
+    const int32_t six[6] = {0, 1, 2, 3, 4, 5};
+    calib_identity(&cal, 6, six);
     cal.valid_mask = 0x3F;
     cal.heading_mask = 0x3F;
     cal.acceleration_offset[2][1] = 0.125f;
