@@ -94,6 +94,31 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void AChestTheModelDoesNotReadDoesNotBlockCalibrationWhenAbsent()
+        {
+            // The shipped model reads the six; a character also listing a chest (node 6) that never
+            // sends gets it marked optional by the runner, so the six calibrate and poses flow.
+            using var runner = new MocapRunner();
+            int poses = 0;
+            runner.PoseSolved += (int c, in MocapPose pose) => poses++;
+            var character = Character("Ada", _walk);
+            character.Config.AddSensor(MocapSegment.Chest, 6);
+            Assert.IsFalse(character.Config.Sensors[6].Optional, "the plan itself asks for a required chest");
+            Assert.IsTrue(runner.Open(Plan(character)));
+            RunUntil(runner, MocapRunnerEvent.Ended);
+            var session = runner.GetSession(0);
+            Assert.AreEqual(7, session.SensorCount);
+            Assert.AreEqual(MocapSegment.Chest, session.SegmentOf(6));
+            Assert.IsTrue(session.Config.Sensors[6].Optional, "the runner made the chest optional");
+            var calibration = session.Calibration;
+            Assert.IsTrue(calibration.IsValid(MocapSegment.Pelvis) && calibration.IsValid(MocapSegment.Head));
+            Assert.IsFalse(calibration.IsValid(MocapSegment.Chest));
+            Assert.IsTrue(session.GetCalibrationReport(CalibrationStep.TPose).TryGetSensor(MocapSegment.Chest, out var chest)
+                          && chest.IsLeftOut, "left out, not refused");
+            Assert.Greater(poses, 100, "the six calibrated: poses were solved");
+        }
+
+        [Test]
         public void ARestartCarriesEachCharactersCalibration()
         {
             using var runner = new MocapRunner();
