@@ -189,6 +189,47 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void SevenSensorFramesEqualMocapctlsAndRoundTripAsARecording()
+        {
+            var capture = TestPaths.Synth("walk", seconds: 4, seed: 7, sensors: SevenSensorList);
+            var run = Replay.Run(capture, sensors: Seven());
+            var csv = Path.Combine(_dir, "mocapctl-seven.csv");
+            // mocapctl with the same sensor list in the same order, the same prelude windows.
+            TestPaths.RunMocapctl("replay", capture.CapturePath, "--csv", csv, "--sensors",
+                                  string.Join(",", Seven().Select(x => $"{SegmentTable.Name(x.Segment)}={x.NodeId}")));
+            var expected = Capture.FrameRecording.Load(csv);
+            Assert.AreEqual(expected.Length, run.Frames.Count);
+            for (int i = 0; i < expected.Length; i += 7)
+            {
+                Assert.AreEqual(7, expected[i].SensorCount, $"frame {i}: mocapctl's header names seven sensors");
+                Assert.AreEqual(expected[i].Flags, run.Frames[i].Flags, $"frame {i}");
+                for (int s = 0; s < 7; s++)
+                {
+                    MocapSensorFrame e = expected[i].GetSensor(s), a = run.Frames[i].GetSensor(s);
+                    Assert.AreEqual(e.Segment, a.Segment, $"frame {i} sensor {s}");
+                    Assert.AreEqual(e.Flags, a.Flags, $"frame {i} sensor {s}");
+                    Assert.AreEqual(e.BoneOrientation.X, a.BoneOrientation.X, 2e-6, $"frame {i} sensor {s}");
+                    Assert.AreEqual(e.BoneAcceleration.Y, a.BoneAcceleration.Y, 2e-4, $"frame {i} sensor {s}");
+                }
+            }
+
+            var path = Path.Combine(_dir, "seven.csv");
+            Capture.FrameRecording.Save(path, run.Frames.ToArray());
+            StringAssert.Contains(",chest_qw,chest_qx,chest_qy,chest_qz,chest_ax,chest_ay,chest_az,chest_flags,left_wrist_qw",
+                File.ReadAllText(path), "the chest's columns, second, as in the session");
+            var loaded = Capture.FrameRecording.Load(path);
+            var last = loaded[loaded.Length - 1];
+            Assert.AreEqual(7, last.SensorCount);
+            Assert.AreEqual(1, last.IndexOf(MocapSegment.Chest));
+            Assert.AreEqual(run.Frames[run.Frames.Count - 1].GetSensor(1).BoneOrientation.Z, last.GetSensor(1).BoneOrientation.Z, 1e-6);
+
+            // Frames of two sensor sets do not make one recording.
+            var mixed = new[] { run.Frames[0], Replay.Run(TestPaths.Synth("walk", seconds: 3)).Frames[0] };
+            var e2 = Assert.Throws<MocapException>(() => Capture.FrameRecording.Save(Path.Combine(_dir, "mixed.csv"), mixed));
+            StringAssert.Contains("frame 1: 6 sensors, the first frame has 7", e2.Message);
+        }
+
+        [Test]
         public void ASevenSensorCalibrationRoundTripsThroughItsFile()
         {
             var capture = TestPaths.Synth("walk", seconds: 4, seed: 7, sensors: SevenSensorList);
