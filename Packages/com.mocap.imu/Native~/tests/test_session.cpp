@@ -28,11 +28,14 @@
 extern "C" {
 #include "calibration.h"
 #include "capture_file.h"
+#include "error.h"
 #include "hipnuc_decoder.h"
 #include "platform.h"
 }
 
 namespace {
+
+constexpr int kSensors = 6; // the default set, sensor i on segment i
 
 using Clock = std::chrono::steady_clock;
 
@@ -143,7 +146,7 @@ TEST(Session, ReplayEndToEndMatchesTruthAndEnds)
     ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
     ASSERT_EQ(mocap_calibration_get_step_report(session.s, MOCAP_CALIBRATION_HEADING, &rep), MOCAP_OK);
     ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) EXPECT_TRUE(rep.sensors[s].ok);
+    for (int s = 0; s < kSensors; ++s) EXPECT_TRUE(rep.sensors[s].ok);
 
     // Drain to the end: the replay reports END_OF_STREAM once everything was delivered.
     std::vector<mocap_frame> buf(128);
@@ -176,7 +179,7 @@ TEST(Session, ReplayEndToEndMatchesTruthAndEnds)
 
     ErrorStats errors;
     for (const auto &f : frames) score_frame(truth, f, errors);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (int s = 0; s < kSensors; ++s) {
         SCOPED_TRACE(mocap_segment_name(s));
         ASSERT_GT(errors.count(s), 400u);
         EXPECT_LT(errors.mean(s), 1.0);
@@ -268,7 +271,7 @@ TEST(Session, LiveSerialPtyCalibratesAndTracksAndRecords)
     TruthTrack truth(shifted, packets);
     ErrorStats errors;
     for (const auto &f : frames) score_frame(truth, f, errors);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (int s = 0; s < kSensors; ++s) {
         SCOPED_TRACE(mocap_segment_name(s));
         ASSERT_GT(errors.count(s), 100u);
         EXPECT_LT(errors.mean(s), 1.5);
@@ -446,9 +449,9 @@ TEST(Session, BadSamplesAreRejectedAndCountedWithoutStoppingOthers)
 
     const int packets = 60;
     for (int i = 0; i < packets; ++i) {
-        hipnuc_sample samples[MOCAP_SENSOR_COUNT];
+        hipnuc_sample samples[kSensors];
         std::memset(samples, 0, sizeof samples);
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+        for (int s = 0; s < kSensors; ++s) {
             samples[s].node_id = (uint32_t)s;
             samples[s].time_ms = 1000u + (uint32_t)i * 10u;
             samples[s].acc_g[2] = 1.0f;
@@ -459,7 +462,7 @@ TEST(Session, BadSamplesAreRejectedAndCountedWithoutStoppingOthers)
         samples[3].quat[0] = 1.7f;            // left shin: far from unit
         samples[4].acc_g[0] = INFINITY;       // right shin: infinite acceleration
         uint8_t payload[HIPNUC_MAX_PAYLOAD], frame[HIPNUC_MAX_PAYLOAD + 16];
-        size_t plen = hipnuc_encode_gwsol(1, samples, MOCAP_SENSOR_COUNT, payload, sizeof payload);
+        size_t plen = hipnuc_encode_gwsol(1, samples, kSensors, payload, sizeof payload);
         size_t flen = hipnuc_encode_frame(payload, plen, frame, sizeof frame);
         ASSERT_GT(flen, 0u);
         ASSERT_TRUE(receiver.write_all(frame, flen));
@@ -477,7 +480,7 @@ TEST(Session, BadSamplesAreRejectedAndCountedWithoutStoppingOthers)
     EXPECT_EQ(stats.sensors_seen_mask, (1u << 0) | (1u << 5));
     ASSERT_GT(frames.size(), 10u);
     const mocap_frame &f = frames.back();
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (int s = 0; s < kSensors; ++s) {
         for (int k = 0; k < 4; ++k) ASSERT_TRUE(std::isfinite(f.sensors[s].bone_orientation[k]));
         for (int k = 0; k < 3; ++k) ASSERT_TRUE(std::isfinite(f.sensors[s].bone_acceleration[k]));
     }
@@ -818,7 +821,8 @@ TEST(Session, CalibrationSetRefusesWhatSaveAndLoadRefuse)
     SessionCloser session;
     ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK);
     static mocap_calibration good, bad;
-    calib_identity(&good);
+    const int32_t six[kSensors] = {0, 1, 2, 3, 4, 5};
+    calib_identity(&good, kSensors, six);
     good.valid_mask = good.heading_mask = 0x3F;
     ASSERT_EQ(mocap_calibration_set(session.s, &good), MOCAP_OK) << mocap_last_error();
 
@@ -1031,3 +1035,248 @@ TEST(Session, PollAfterALongPauseReturnsTheNewestFrame)
     EXPECT_EQ(mocap_session_drain(session.s, rest, 8, &n), MOCAP_ERR_END_OF_STREAM);
     EXPECT_EQ(n, 0u);
 }
+
+namespace {
+
+// A replay session of `capture` with the default set plus a chest on node 6.
+mocap_session_config seven_sensor_replay(const std::string &capture, uint32_t optional_mask = 0)
+{
+    mocap_session_config c = replay_config(capture);
+    c.sensor_count = 7;
+    c.sensor_segments[6] = MOCAP_SEGMENT_CHEST;
+    c.node_ids[6] = 6;
+    c.optional_mask = optional_mask;
+    return c;
+}
+
+// Schedules both prelude steps, starts, and drains to the end of the replay.
+std::vector<mocap_frame> replay_with_prelude(mocap_session *s, const synth_config &cfg)
+{
+    std::vector<mocap_frame> frames;
+    const double t0 = synth_session_time(&cfg, 0.0);
+    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_HEADING, t0 + 0.5, (float)(cfg.heading_s - 1.0)),
+              MOCAP_OK);
+    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_TPOSE, t0 + cfg.heading_s + cfg.strap_s + 0.5,
+                                         (float)(cfg.tpose_s - 1.0)), MOCAP_OK);
+    EXPECT_EQ(mocap_session_start(s), MOCAP_OK) << mocap_last_error();
+    std::vector<mocap_frame> buf(128);
+    const auto start = Clock::now();
+    while (seconds_since(start) < 60) {
+        uint32_t n = 0;
+        mocap_status st = mocap_session_drain(s, buf.data(), (uint32_t)buf.size(), &n);
+        frames.insert(frames.end(), buf.begin(), buf.begin() + n);
+        if (st == MOCAP_ERR_END_OF_STREAM) return frames;
+        if (n == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    ADD_FAILURE() << "the replay did not end";
+    return frames;
+}
+
+}  // namespace
+
+// A generated 7-sensor capture (the chest on node 6) through a session configured with the same
+// seven: heading and T-pose accepted with every sensor calibrated, the chest's bone within the
+// six-sensor replay's bound of its truth, frames of 7 sensors in config order with their states.
+TEST(Session, SevenSensorReplayCalibratesTheChestToo)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 22;
+    cfg.motion_s = 8.0;
+    cfg.sensor_count = 7;
+    cfg.segments[6] = MOCAP_SEGMENT_CHEST;
+    cfg.node_ids[6] = 6;
+    add_realistic_noise(cfg);
+    std::string capture = test_temp_path("seven.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("mixed"), nullptr, capture.c_str(), nullptr),
+              MOCAP_OK) << mocap_last_error();
+    auto packets = generate(cfg);
+    TruthTrack truth(cfg, packets);
+
+    // Listed in another order than the capture's: the session's order is what frames follow.
+    mocap_session_config config = seven_sensor_replay(capture);
+    const int32_t order[7] = {MOCAP_SEGMENT_CHEST, MOCAP_SEGMENT_PELVIS, MOCAP_SEGMENT_HEAD,
+                              MOCAP_SEGMENT_LEFT_WRIST, MOCAP_SEGMENT_RIGHT_WRIST,
+                              MOCAP_SEGMENT_LEFT_SHIN, MOCAP_SEGMENT_RIGHT_SHIN};
+    for (int i = 0; i < 7; ++i) {
+        config.sensor_segments[i] = order[i];
+        config.node_ids[i] = order[i] == MOCAP_SEGMENT_CHEST ? 6 : order[i];
+    }
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    std::vector<mocap_frame> frames = replay_with_prelude(session.s, cfg);
+    for (int step : {MOCAP_CALIBRATION_HEADING, MOCAP_CALIBRATION_TPOSE}) {
+        mocap_calibration_report rep;
+        ASSERT_EQ(mocap_calibration_get_step_report(session.s, step, &rep), MOCAP_OK);
+        ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
+        ASSERT_EQ(rep.sensor_count, 7u);
+        for (int i = 0; i < 7; ++i) {
+            EXPECT_EQ(rep.sensors[i].segment, order[i]);
+            EXPECT_TRUE(rep.sensors[i].ok) << i;
+            EXPECT_EQ(rep.sensors[i].left_out, 0);
+        }
+    }
+    static mocap_calibration cal;
+    ASSERT_EQ(mocap_calibration_get(session.s, &cal), MOCAP_OK);
+    EXPECT_EQ(cal.sensor_count, 7u);
+    EXPECT_EQ(cal.valid_mask, 0x7Fu);
+    EXPECT_EQ(cal.segments[0], MOCAP_SEGMENT_CHEST);
+    mocap_session_stats stats;
+    ASSERT_EQ(mocap_session_get_stats(session.s, &stats), MOCAP_OK);
+    EXPECT_EQ(stats.sensors_seen_mask, 0x7Fu);
+
+    ASSERT_FALSE(frames.empty());
+    size_t fresh_chest = 0;
+    int states_seen = 0;
+    for (const mocap_frame &f : frames) {
+        ASSERT_EQ(f.sensor_count, 7u);
+        for (int i = 0; i < 7; ++i) {
+            ASSERT_EQ(f.sensors[i].segment, order[i]);
+            ASSERT_EQ(f.sensors[i].node_id, (uint32_t)config.node_ids[i]);
+            const int32_t state = f.sensors[i].state;
+            ASSERT_TRUE(state >= MOCAP_SENSOR_FRESH && state <= MOCAP_SENSOR_ABSENT) << state;
+            states_seen |= 1 << state;
+            // The state says what the flags and the fresh mask say.
+            EXPECT_EQ(state == MOCAP_SENSOR_FRESH, (f.fresh_mask >> i & 1u) != 0) << "frame " << f.sequence;
+            EXPECT_EQ(state == MOCAP_SENSOR_SILENT, (f.sensors[i].flags & MOCAP_SENSOR_STALE) != 0);
+        }
+        for (int i = 7; i < MOCAP_MAX_SENSORS; ++i) ASSERT_EQ(f.sensors[i].flags, 0u);
+        fresh_chest += f.sensors[0].state == MOCAP_SENSOR_FRESH;
+    }
+    EXPECT_GT(fresh_chest, frames.size() * 9 / 10);
+    EXPECT_TRUE(states_seen & (1 << MOCAP_SENSOR_FRESH));
+    EXPECT_TRUE(states_seen & (1 << MOCAP_SENSOR_HOLDING)); // after the last sample, held
+    // Within the six-sensor replay's bound (mean 1 deg) of each segment's own truth.
+    ErrorStats errors;
+    for (const auto &f : frames) score_frame(truth, f, errors);
+    for (int i = 0; i < 7; ++i) {
+        SCOPED_TRACE(mocap_segment_name(order[i]));
+        ASSERT_GT(errors.count(i), 400u);
+        EXPECT_LT(errors.mean(i), 1.0);
+    }
+}
+
+// The chest configured but its node never sends (a six-sensor capture). Optional: calibration
+// is accepted with the chest left out and frames are calibrated; required: refused naming it.
+TEST(Session, ASilentChestIsLeftOutOnlyWhenOptional)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = 23;
+    cfg.motion_s = 2.0;
+    add_realistic_noise(cfg);
+    std::string capture = test_temp_path("six.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr),
+              MOCAP_OK) << mocap_last_error();
+    {
+        mocap_session_config config = seven_sensor_replay(capture, 1u << 6);
+        SessionCloser session;
+        ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+        std::vector<mocap_frame> frames = replay_with_prelude(session.s, cfg);
+        mocap_calibration_report rep;
+        ASSERT_EQ(mocap_calibration_get_step_report(session.s, MOCAP_CALIBRATION_TPOSE, &rep), MOCAP_OK);
+        ASSERT_EQ(rep.state, MOCAP_CALIBRATION_ACCEPTED) << rep.reason;
+        EXPECT_EQ(rep.sensors[6].segment, MOCAP_SEGMENT_CHEST);
+        EXPECT_EQ(rep.sensors[6].left_out, 1);
+        ASSERT_FALSE(frames.empty());
+        const mocap_frame &last = frames.back();
+        EXPECT_TRUE(last.flags & MOCAP_FRAME_CALIBRATED);
+        EXPECT_EQ(last.sensors[6].state, MOCAP_SENSOR_ABSENT);
+        EXPECT_FALSE(last.sensors[6].flags & MOCAP_SENSOR_CALIBRATED);
+        EXPECT_FALSE(last.flags & MOCAP_FRAME_COMPLETE);
+    }
+    {
+        mocap_session_config config = seven_sensor_replay(capture, 0);
+        SessionCloser session;
+        ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+        std::vector<mocap_frame> frames = replay_with_prelude(session.s, cfg);
+        mocap_calibration_report rep;
+        ASSERT_EQ(mocap_calibration_get_step_report(session.s, MOCAP_CALIBRATION_HEADING, &rep), MOCAP_OK);
+        EXPECT_EQ(rep.state, MOCAP_CALIBRATION_REFUSED);
+        EXPECT_NE(std::string(rep.reason).find("chest"), std::string::npos) << rep.reason;
+        for (const auto &f : frames) ASSERT_FALSE(f.flags & MOCAP_FRAME_CALIBRATED);
+    }
+}
+
+// Each mistake in a sensor set is refused at open with a message that names it.
+TEST(Session, RejectsBadSensorSetsNamingTheProblem)
+{
+    struct Case {
+        const char *what;
+        void (*change)(mocap_session_config &);
+        const char *needle;
+    };
+    const Case cases[] = {
+        {"duplicate segment", [](mocap_session_config &c) { c.sensor_segments[3] = MOCAP_SEGMENT_PELVIS; },
+         "pelvis"},
+        {"duplicate node", [](mocap_session_config &c) { c.node_ids[6] = 2; }, "node id 2"},
+        {"unknown segment", [](mocap_session_config &c) { c.sensor_segments[6] = 7; }, "segment 7"},
+        {"negative segment", [](mocap_session_config &c) { c.sensor_segments[1] = -1; }, "segment -1"},
+        {"node out of range", [](mocap_session_config &c) { c.node_ids[6] = 256; }, "256"},
+        {"no sensors", [](mocap_session_config &c) { c.sensor_count = 0; }, "sensor_count 0"},
+        {"too many sensors", [](mocap_session_config &c) { c.sensor_count = 17; }, "sensor_count 17"},
+        {"optional beyond the count", [](mocap_session_config &c) { c.optional_mask = 1u << 7; },
+         "optional_mask"},
+    };
+    for (const Case &k : cases) {
+        mocap_session_config c = serial_config("/dev/null");
+        c.sensor_count = 7;
+        c.sensor_segments[6] = MOCAP_SEGMENT_CHEST;
+        c.node_ids[6] = 6;
+        k.change(c);
+        mocap_session *s = nullptr;
+        mocap_clear_error();
+        EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_ERR_INVALID_ARGUMENT) << k.what;
+        EXPECT_EQ(s, nullptr) << k.what;
+        EXPECT_NE(std::string(mocap_last_error()).find(k.needle), std::string::npos)
+            << k.what << ": " << mocap_last_error();
+        mocap_session_close(s);
+    }
+}
+
+// A saved calibration is applied by segment: a session listing the sensors in another order, or
+// only some of them, gets each sensor's own entry.
+TEST(Session, CalibrationSetMatchesEntriesBySegment)
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.motion_s = 1.0;
+    std::string capture = test_temp_path("bysegment.cap");
+    ASSERT_EQ(synth_write_capture(&cfg, synth_builtin_motion("walk"), nullptr, capture.c_str(), nullptr), MOCAP_OK);
+    static mocap_calibration six, now;
+    const int32_t segments[kSensors] = {0, 1, 2, 3, 4, 5};
+    calib_identity(&six, kSensors, segments);
+    for (int i = 0; i < kSensors; ++i) {
+        six.acceleration_offset[i][1] = 9.0f + 0.1f * (float)i; // tells the entries apart
+    }
+    six.valid_mask = six.heading_mask = 0x3F;
+    mocap_session_config config = replay_config(capture);
+    config.sensor_count = 3;
+    config.sensor_segments[0] = MOCAP_SEGMENT_HEAD;
+    config.sensor_segments[1] = MOCAP_SEGMENT_CHEST;
+    config.sensor_segments[2] = MOCAP_SEGMENT_PELVIS;
+    config.node_ids[0] = 5;
+    config.node_ids[1] = 6;
+    config.node_ids[2] = 0;
+    SessionCloser session;
+    ASSERT_EQ(mocap_session_open(&config, &session.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_calibration_set(session.s, &six), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_calibration_get(session.s, &now), MOCAP_OK);
+    EXPECT_EQ(now.sensor_count, 3u);
+    EXPECT_EQ(now.segments[0], MOCAP_SEGMENT_HEAD);
+    EXPECT_EQ(now.segments[1], MOCAP_SEGMENT_CHEST);
+    EXPECT_EQ(now.segments[2], MOCAP_SEGMENT_PELVIS);
+    EXPECT_FLOAT_EQ(now.acceleration_offset[0][1], 9.5f); // the head's entry
+    EXPECT_FLOAT_EQ(now.acceleration_offset[2][1], 9.0f); // the pelvis's
+    EXPECT_EQ(now.valid_mask, 0x5u); // the chest has no entry: uncalibrated
+
+    // Nothing in common: refused.
+    mocap_session_config chest_only = replay_config(capture);
+    chest_only.sensor_count = 1;
+    chest_only.sensor_segments[0] = MOCAP_SEGMENT_CHEST;
+    chest_only.node_ids[0] = 6;
+    SessionCloser other;
+    ASSERT_EQ(mocap_session_open(&chest_only, &other.s), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(mocap_calibration_set(other.s, &six), MOCAP_ERR_INVALID_ARGUMENT);
+}
+
