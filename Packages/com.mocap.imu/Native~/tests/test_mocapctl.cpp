@@ -70,6 +70,65 @@ TEST(Mocapctl, SynthThenReplayCalibratesAndReportsSmallError)
     EXPECT_EQ(std::count(header.begin(), header.end(), ','), 50);
 }
 
+// `--sensors` with a chest on node 6: synth writes seven nodes and a truth of seven column
+// groups; replay with the same set calibrates all seven and measures the chest against its truth;
+// the saved calibration lists the seven segments.
+TEST(Mocapctl, SevenSensorSynthAndReplay)
+{
+    std::string dir = test_temp_dir();
+    const std::string set = "pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=6";
+    CommandResult synth = run_command("synth --out " + dir + "/c.cap --truth " + dir + "/t.csv --motion walk --seed 5 " +
+                                      "--sensors " + set);
+    ASSERT_EQ(synth.exit_code, 0) << synth.output;
+    EXPECT_NE(synth.output.find("7 sensors (" + set + ")"), std::string::npos) << synth.output;
+    auto truth = read_file_bytes(dir + "/t.csv");
+    std::string truth_text(truth.begin(), truth.end());
+    std::string truth_header = truth_text.substr(0, truth_text.find('\n'));
+    EXPECT_EQ(std::count(truth_header.begin(), truth_header.end(), ','), 1 + 7 * 7) << truth_header;
+    EXPECT_NE(truth_header.find(",chest_qw,"), std::string::npos) << truth_header;
+
+    CommandResult replay = run_command("replay " + dir + "/c.cap --truth " + dir + "/t.csv --sensors " + set +
+                                       " --save-calibration " + dir + "/c.calibration --csv " + dir + "/f.csv");
+    ASSERT_EQ(replay.exit_code, 0) << replay.output;
+    EXPECT_NE(replay.output.find("T-pose step: accepted"), std::string::npos) << replay.output;
+    std::smatch m;
+    // The summary row of the chest: its node, then fresh%, held, stale, mean, p95, max, acc.
+    std::regex chest_row("\n  chest +6 +([0-9.]+)% +[0-9]+ +[0-9]+ +([0-9.]+) +[0-9.]+ +([0-9.]+)");
+    ASSERT_TRUE(std::regex_search(replay.output, m, chest_row)) << replay.output;
+    EXPECT_GT(std::stod(m[1]), 90.0);
+    EXPECT_LT(std::stod(m[2]), 1.0); // the six-sensor bound of the first test
+    EXPECT_GT(std::stod(m[3]), 0.0);
+    std::regex chest_quality("\n    chest +ok ");
+    EXPECT_TRUE(std::regex_search(replay.output, m, chest_quality)) << replay.output;
+    auto cal = read_file_bytes(dir + "/c.calibration");
+    std::string cal_text(cal.begin(), cal.end());
+    EXPECT_NE(cal_text.find("\nsensors pelvis left_wrist right_wrist left_shin right_shin head chest\n"),
+              std::string::npos) << cal_text;
+    auto csv = read_file_bytes(dir + "/f.csv");
+    std::string csv_text(csv.begin(), csv.end());
+    std::string header = csv_text.substr(0, csv_text.find('\n'));
+    EXPECT_EQ(std::count(header.begin(), header.end(), ','), 2 + 7 * 8) << header;
+
+    // The default six replay the same capture: the chest's node is simply not one of theirs.
+    CommandResult six = run_command("replay " + dir + "/c.cap --truth " + dir + "/t.csv");
+    ASSERT_EQ(six.exit_code, 0) << six.output;
+    EXPECT_EQ(six.output.find("\n  chest "), std::string::npos) << six.output;
+
+    // With the chest optional and its node silent (another node id), calibration leaves it out.
+    std::string silent = "pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=9?";
+    CommandResult optional = run_command("replay " + dir + "/c.cap --sensors " + silent);
+    ASSERT_EQ(optional.exit_code, 0) << optional.output;
+    EXPECT_NE(optional.output.find("chest        left out"), std::string::npos) << optional.output;
+    EXPECT_NE(optional.output.find("T-pose step: accepted"), std::string::npos) << optional.output;
+    // Required, it is refused naming it.
+    CommandResult required = run_command("replay " + dir + "/c.cap --sensors " + silent.substr(0, silent.size() - 1));
+    EXPECT_EQ(required.exit_code, 1) << required.output;
+    EXPECT_NE(required.output.find("REFUSED"), std::string::npos) << required.output;
+    EXPECT_NE(required.output.find("reason: "), std::string::npos) << required.output;
+    EXPECT_NE(required.output.substr(required.output.find("reason: ")).find("chest"), std::string::npos)
+        << required.output;
+}
+
 TEST(Mocapctl, ReplayOfAMissingFileFailsWithItsName)
 {
     CommandResult r = run_command("replay /nonexistent/x.cap");
@@ -264,6 +323,35 @@ TEST(Mocapctl, OptionsWithoutValuesOrWithBadNumbersAreUsageErrors)
     CommandResult wrong = run_shell("(" + std::string(MOCAP_MOCAPCTL) + " frobnicate 2>/dev/null)");
     EXPECT_EQ(wrong.exit_code, 2);
     EXPECT_EQ(wrong.output.find("usage"), std::string::npos) << wrong.output;
+}
+
+// A --sensors list that is not one is a usage error naming the entry at fault, before anything
+// is written.
+TEST(Mocapctl, SensorsListErrorsAreUsageErrors)
+{
+    std::string dir = test_temp_dir();
+    const std::string out = " --out " + dir + "/a.cap";
+    const UsageErrorCase cases[] = {
+        {"synth" + out + " --sensors pelvis=0,spine=1", "unknown segment 'spine'"},
+        {"synth" + out + " --sensors pelvis=0,head=0", "node 0 is given to both pelvis and head"},
+        {"synth" + out + " --sensors pelvis=0,pelvis=1", "segment pelvis is listed twice"},
+        {"synth" + out + " --sensors pelvis", "'pelvis' is not SEGMENT=NODE"},
+        {"synth" + out + " --sensors pelvis=x", "node 'x' of pelvis"},
+        {"synth" + out + " --sensors pelvis=300", "node '300' of pelvis"},
+        {"synth" + out + " --sensors pelvis=0,,head=5", "is not SEGMENT=NODE"},
+        {"synth" + out + " --sensors", "--sensors needs a value"},
+        {"replay " + dir + "/a.cap --sensors chest=6,chest=7?", "segment chest is listed twice"},
+        {"record --port /dev/null" + out + " --sensors head=5,wrist=2", "unknown segment 'wrist'"},
+        {"live --port /dev/null --sensors pelvis=0,head=0", "node 0 is given to both"},
+        {"stream --vmc 127.0.0.1:1 --replay " + dir + "/a.cap --sensors knee=3", "unknown segment 'knee'"},
+        {"bench pipeline --sensors knee=3", "unknown segment 'knee'"},
+    };
+    expect_usage_errors(cases);
+    EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
+    // The unknown-segment error lists the known ones.
+    CommandResult r = run_command("synth" + out + " --sensors spine=1");
+    EXPECT_NE(r.output.find("known: pelvis, left_wrist, right_wrist, left_shin, right_shin, head, chest"),
+              std::string::npos) << r.output;
 }
 
 // A mistyped option was ignored: the command ran with the default it was meant to change

@@ -223,3 +223,43 @@ TEST(MocapctlStream, AStreamedReplayLosesNothingAtAnySpeed)
     EXPECT_EQ(std::stol(m[2]), all_poses);
     EXPECT_EQ(hurried.output.find("fell behind"), std::string::npos) << hurried.output;
 }
+
+// With a model loaded, a sensor whose segment the model does not require is optional by itself:
+// a chest listed in --sensors but silent in the capture is left out and the poses are solved.
+// Without the model the same set needs the chest, and calibration is refused naming it.
+TEST(MocapctlSensors, SensorsTheModelDoesNotRequireBecomeOptional)
+{
+    REQUIRE_ORT();
+    mocap_model *model = nullptr;
+    ASSERT_EQ(mocap_model_open(kShippedModel.string().c_str(), nullptr, &model), MOCAP_OK) << mocap_last_error();
+    mocap_model_info info;
+    ASSERT_EQ(mocap_model_get_info(model, &info), MOCAP_OK);
+    mocap_model_close(model);
+    bool chest_required = false;
+    for (uint32_t k = 0; k < info.sensor_count; ++k)
+        if (info.sensor_segments[k] == MOCAP_SEGMENT_CHEST) chest_required = (info.sensor_required_mask >> k) & 1u;
+
+    const std::string dir = test_temp_dir();
+    const std::string capture = dir + "/six.cap";
+    ASSERT_EQ(mocapctl("synth --out " + capture + " --motion walk --seconds 2").exit_code, 0);
+    const std::string set = " --sensors pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=6";
+    if (chest_required) { // a model that needs the chest keeps it required: refused, naming it
+        Result refused = mocapctl("replay " + capture + " --model " + kShippedModel.string() + set);
+        EXPECT_EQ(refused.exit_code, 1) << refused.output;
+        EXPECT_NE(refused.output.find("chest", refused.output.find("reason: ")), std::string::npos)
+            << refused.output;
+        return;
+    }
+    Result posed = mocapctl("replay " + capture + " --model " + kShippedModel.string() + set + " --json " +
+                            dir + "/p.jsonl");
+    ASSERT_EQ(posed.exit_code, 0) << posed.output;
+    EXPECT_NE(posed.output.find("T-pose step: accepted"), std::string::npos) << posed.output;
+    EXPECT_NE(posed.output.find("chest        left out"), std::string::npos) << posed.output;
+    EXPECT_GT(count_lines(dir + "/p.jsonl"), 100u);
+
+    Result sensors_only = mocapctl("replay " + capture + set);
+    EXPECT_EQ(sensors_only.exit_code, 1) << sensors_only.output;
+    const size_t reason = sensors_only.output.find("reason: ");
+    ASSERT_NE(reason, std::string::npos) << sensors_only.output;
+    EXPECT_NE(sensors_only.output.find("chest", reason), std::string::npos) << sensors_only.output;
+}

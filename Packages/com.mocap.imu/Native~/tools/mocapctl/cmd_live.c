@@ -9,6 +9,7 @@
 #include "platform.h"
 #include "pose_model.h"
 #include "report.h"
+#include "sensor_set.h"
 
 #define LIVE_POSE_DRAIN 64
 
@@ -84,6 +85,9 @@ int cmd_live(int argc, char **argv)
     cli_refuse_overwriting(cli_value(argc, argv, "--port"), "serial port", argc, argv, live_outputs);
     /* Read before anything is opened: a bad value must not leave an empty capture behind. */
     const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
+    mocap_session_config sensor_check;
+    mocap_config_defaults(&sensor_check);
+    if (sensor_set_from_args(argc, argv, &sensor_check) != 0) return 2; /* before the capture */
     const int with_model = cli_value(argc, argv, "--model") != NULL || cli_flag(argc, argv, "--pose");
     if (!with_model) cli_refuse_options(argc, argv, "--smoothing", "applies to poses only (add --pose or --model)");
     mocap_model *model = NULL;

@@ -5,6 +5,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "live_session.h"
+#include "sensor_set.h"
 
 int cmd_record(int argc, char **argv)
 {
@@ -12,6 +13,9 @@ int cmd_record(int argc, char **argv)
     /* Read before anything is opened: a bad value must not leave an empty capture behind. */
     const double limit = cli_number(argc, argv, "--seconds", 1e30, 0.001, 1e30);
     if (!out) return mocapctl_usage_error("record");
+    mocap_session_config sensor_check;
+    mocap_config_defaults(&sensor_check);
+    if (sensor_set_from_args(argc, argv, &sensor_check) != 0) return 2; /* before the capture */
     static const char *const record_outputs[] = {"--out", NULL};
     cli_refuse_overwriting(cli_value(argc, argv, "--port"), "serial port", argc, argv, record_outputs);
     mocap_session *session = NULL;
