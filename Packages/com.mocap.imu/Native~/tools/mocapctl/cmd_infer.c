@@ -14,8 +14,10 @@
  *     uint32    rank (1..8)
  *     uint32    dims[rank]
  *     float32   data[product of dims], row-major
- * Input: imu_orientation [B, N, 6, 3, 3] and imu_acceleration [B, N, 6, 3], optionally
- * state_in_h / state_in_c [L, B, H] (zeros when absent). Output: joint_rotations
+ * Input: imu_orientation [B, N, S, 3, 3] and imu_acceleration [B, N, S, 3] with S the model's
+ * sensor count (6 for a contract-1 model), optionally imu_mask [B, N, S] (1 present, 0 missing;
+ * all ones when absent; only for a model with the mask input, contract 2) and state_in_h /
+ * state_in_c [L, B, H] (zeros when absent). Output: joint_rotations
  * [B, N, 24, 3, 3], root_velocity [B, N, 3], foot_contact [B, N, 2] and the state after the last
  * frame, state_out_h / state_out_c [L, B, H].
  *
@@ -229,6 +231,15 @@ static void print_info(const char *path, const ort_model_info *info)
     printf("  precision         %s\n", info->precision);
     printf("  frame_rate        %g\n", info->frame_rate);
     printf("  sensor_order      %s\n", info->sensor_order);
+    printf("  sensor_count      %d\n", info->sensor_count);
+    printf("  optional          ");
+    int optional = 0;
+    for (int k = 0; k < info->sensor_count && k < MOCAP_MAX_SENSORS; ++k) {
+        if ((info->required_mask >> k) & 1u) continue;
+        printf("%s%s", optional++ ? "," : "", mocap_segment_name(info->sensor_segments[k]));
+    }
+    printf("%s\n", optional ? "" : "none");
+    printf("  imu_mask          %s\n", info->has_mask ? "yes" : "no");
     printf("  state             layers %d, size %d\n", info->state_layers, info->state_size);
     printf("  joints            # name parent rest_offset_m\n");
     for (int j = 0; j < ORT_JOINTS; ++j)
@@ -298,14 +309,34 @@ int cmd_infer(int argc, char **argv)
 
     tensor *ori = bundle_find(&in, "imu_orientation");
     tensor *acc = bundle_find(&in, "imu_acceleration");
+    tensor *mask = bundle_find(&in, "imu_mask");
     if (!ori || !acc) {
         fprintf(stderr, "mocapctl: %s lacks imu_orientation or imu_acceleration\n", in_path);
         goto done;
     }
-    const uint32_t want_ori[5] = {0, 0, 6, 3, 3};
-    if (!check_shape(ori, 5, want_ori, "[B, N, 6, 3, 3]")) goto done;
-    const uint32_t want_acc[4] = {ori->dims[0], ori->dims[1], 6, 3};
-    if (!check_shape(acc, 4, want_acc, "[B, N, 6, 3] matching imu_orientation")) goto done;
+    /* The model says how many sensors the inputs hold. */
+    mocap_status st = ort_model_open(model_path, &o, &m);
+    if (st != MOCAP_OK) {
+        rc = report(st, "opening model");
+        goto done;
+    }
+    const ort_model_info *info = ort_model_get_info(m);
+    const uint32_t S = (uint32_t)info->sensor_count;
+    char shape[96];
+    snprintf(shape, sizeof shape, "[B, N, %u, 3, 3] (the model's %u sensors)", S, S);
+    const uint32_t want_ori[5] = {0, 0, S, 3, 3};
+    if (!check_shape(ori, 5, want_ori, shape)) goto done;
+    const uint32_t want_acc[4] = {ori->dims[0], ori->dims[1], S, 3};
+    snprintf(shape, sizeof shape, "[B, N, %u, 3] matching imu_orientation", S);
+    if (!check_shape(acc, 4, want_acc, shape)) goto done;
+    if (mask && !info->has_mask) {
+        fprintf(stderr, "mocapctl: %s holds imu_mask but the model has no mask input (contract %d)\n",
+                in_path, info->contract_version);
+        goto done;
+    }
+    const uint32_t want_mask[3] = {ori->dims[0], ori->dims[1], S};
+    snprintf(shape, sizeof shape, "[B, N, %u] matching imu_orientation", S);
+    if (mask && !check_shape(mask, 3, want_mask, shape)) goto done;
     const int B = (int)ori->dims[0], N = (int)ori->dims[1];
     if (B < 1 || N < 1) {
         fprintf(stderr, "mocapctl: %s holds no frames\n", in_path);
@@ -320,12 +351,6 @@ int cmd_infer(int argc, char **argv)
     else if (frames) T = frames;
     if (T > N) T = N;
 
-    mocap_status st = ort_model_open(model_path, &o, &m);
-    if (st != MOCAP_OK) {
-        rc = report(st, "opening model");
-        goto done;
-    }
-    const ort_model_info *info = ort_model_get_info(m);
     const int L = info->state_layers, H = info->state_size;
     const uint32_t want_state[3] = {(uint32_t)L, (uint32_t)B, (uint32_t)H};
     tensor *h0 = bundle_find(&in, "state_in_h"), *c0 = bundle_find(&in, "state_in_c");
@@ -367,8 +392,14 @@ int cmd_infer(int argc, char **argv)
                 memcpy(ort_stream_state_c(tail_stream), ort_stream_state_c(s), state_bytes);
                 s = tail_stream;
             }
-            gather(ort_stream_orientation(s), ori->data, B, N, t, f0, 54);
-            gather(ort_stream_acceleration(s), acc->data, B, N, t, f0, 18);
+            gather(ort_stream_orientation(s), ori->data, B, N, t, f0, (size_t)S * 9);
+            gather(ort_stream_acceleration(s), acc->data, B, N, t, f0, (size_t)S * 3);
+            float *mask_in = ort_stream_mask(s);
+            if (mask_in && mask) {
+                gather(mask_in, mask->data, B, N, t, f0, S);
+            } else if (mask_in) {
+                for (size_t k = 0; k < (size_t)B * (size_t)t * S; ++k) mask_in[k] = 1.0f;
+            }
             int64_t t0 = mocap_monotonic_ns();
             st = ort_stream_run(s);
             times[calls++] = (double)(mocap_monotonic_ns() - t0) * 1e-3;
