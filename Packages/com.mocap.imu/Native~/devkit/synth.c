@@ -205,6 +205,22 @@ static mocap_status check_config(const synth_config *cfg)
     return MOCAP_OK;
 }
 
+/* The motion moves every segment that has a sensor: checked on its first pose, before anything
+ * is generated or written. */
+static mocap_status check_motion_segments(const synth_config *cfg, synth_motion_fn motion,
+                                          void *motion_user)
+{
+    synth_pose first;
+    memset(&first, 0, sizeof first);
+    if (motion(motion_user, 0.0, &first) != 0) return MOCAP_OK; /* an empty motion: prelude only */
+    for (uint32_t i = 0; i < cfg->sensor_count; i++)
+        if (!(first.segment_mask & (1u << cfg->segments[i])))
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                              "synth: the motion does not move segment %s, which has a sensor",
+                              mocap_segment_name(cfg->segments[i]));
+    return MOCAP_OK;
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* Prelude (heading, strapping, T-pose)                                                        */
 /* ------------------------------------------------------------------------------------------ */
@@ -353,6 +369,8 @@ mocap_status synth_generate(const synth_config *cfg, synth_motion_fn motion, voi
         motion = synth_builtin_motion("mixed");
         motion_user = NULL;
     }
+    st = check_motion_segments(cfg, motion, motion_user);
+    if (st != MOCAP_OK) return st;
 
     synth_setup su;
     build_setup(cfg, &su);
@@ -516,6 +534,9 @@ mocap_status synth_write_capture(const synth_config *cfg, synth_motion_fn motion
     if (!cfg || !capture_path || !capture_path[0])
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "synth_write_capture: config or path missing");
     mocap_status st = check_config(cfg);
+    if (st == MOCAP_OK)
+        st = check_motion_segments(cfg, motion ? motion : synth_builtin_motion("mixed"),
+                                   motion ? motion_user : NULL);
     if (st != MOCAP_OK) return st;
 
     write_ctx ctx;

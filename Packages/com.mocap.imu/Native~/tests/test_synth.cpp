@@ -1133,6 +1133,11 @@ TEST(SynthTrajectory, ASegmentsLineNamesTheColumns)
     EXPECT_EQ(synth_generate(&six, synth_trajectory_motion, traj, collect_packet, &none),
               MOCAP_ERR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(mocap_last_error()).find("left_wrist"), std::string::npos) << mocap_last_error();
+    EXPECT_TRUE(none.packets.empty()); // refused before the first packet
+    const std::string cap = test_temp_path("refused.cap");
+    EXPECT_EQ(synth_write_capture(&six, synth_trajectory_motion, traj, cap.c_str(), nullptr),
+              MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_FALSE(std::ifstream(cap).good()) << "a refused capture was written";
 
     synth_config two = short_config();
     two.sensor_count = 2;
