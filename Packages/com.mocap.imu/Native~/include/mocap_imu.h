@@ -46,9 +46,11 @@ extern "C" {
 #  define MOCAP_API
 #endif
 
-#define MOCAP_API_VERSION 5
-#define MOCAP_API_VERSION_MINOR 1
-#define MOCAP_SENSOR_COUNT 6
+#define MOCAP_API_VERSION 6
+#define MOCAP_API_VERSION_MINOR 0
+/* The most sensors one session (one character) carries: a HiPNUC gateway's limit. A session's
+ * own count comes from its config; no array below is filled beyond it. */
+#define MOCAP_MAX_SENSORS 16
 #define MOCAP_PATH_MAX 260
 
 /* ------------------------------------------------------------------------------------------ */
@@ -90,18 +92,31 @@ MOCAP_API const char *mocap_version_string(void);
 /* ------------------------------------------------------------------------------------------ */
 /* Body segments and sensor data                                                               */
 /* ------------------------------------------------------------------------------------------ */
-/* The fixed sensor order used everywhere (and by the pose model). */
+/* Body segments a sensor can ride on: one table in the engine (src/imu/segments.def) gives each
+ * its name, the SMPL joint whose bone it follows and its node id in the default sensor set.
+ * Bindings read the table through the functions below instead of copying it; values are only
+ * ever added (a minor version). */
 typedef enum mocap_segment {
     MOCAP_SEGMENT_PELVIS = 0,
     MOCAP_SEGMENT_LEFT_WRIST = 1,
     MOCAP_SEGMENT_RIGHT_WRIST = 2,
     MOCAP_SEGMENT_LEFT_SHIN = 3,
     MOCAP_SEGMENT_RIGHT_SHIN = 4,
-    MOCAP_SEGMENT_HEAD = 5
+    MOCAP_SEGMENT_HEAD = 5,
+    MOCAP_SEGMENT_CHEST = 6
 } mocap_segment;
 
+/* Number of segments in the table (the valid values are 0 .. count-1). Any thread. */
+MOCAP_API int32_t mocap_segment_count(void);
 /* Name such as "pelvis", "left_wrist". Any thread. NULL for an invalid segment. */
 MOCAP_API const char *mocap_segment_name(int32_t segment);
+/* The segment called name (exact, lower case), or -1. Any thread. */
+MOCAP_API int32_t mocap_segment_find(const char *name);
+/* The SMPL-24 joint (contract order) whose bone the segment's sensor follows, or -1. Any thread. */
+MOCAP_API int32_t mocap_segment_joint(int32_t segment);
+/* The segment's node id in the default sensor set (mocap_config_defaults), or -1 when the
+ * default set leaves it out. Any thread. */
+MOCAP_API int32_t mocap_segment_default_node(int32_t segment);
 
 /* Per-sensor flags in mocap_sensor_frame.flags. */
 enum {
@@ -111,6 +126,14 @@ enum {
     MOCAP_SENSOR_CALIBRATED = 1u << 3,   /* bone_* fields use a calibration */
     MOCAP_SENSOR_EXTRAPOLATED = 1u << 4  /* reserved */
 };
+
+/* What a sensor gave one frame (mocap_sensor_frame.state); the flags above say the same in bits. */
+typedef enum mocap_sensor_state {
+    MOCAP_SENSOR_FRESH = 0,  /* samples bracketed the frame time: interpolated */
+    MOCAP_SENSOR_HOLDING = 1,/* no sample after the frame time yet: the last value is held */
+    MOCAP_SENSOR_SILENT = 2, /* nothing for longer than stale_after_s: the held value is old */
+    MOCAP_SENSOR_ABSENT = 3  /* never sent a sample: the values are placeholders */
+} mocap_sensor_state;
 
 /* One sensor in one output frame. All vectors in SI units. */
 typedef struct mocap_sensor_frame {
@@ -131,11 +154,13 @@ typedef struct mocap_sensor_frame {
     float age_s;
     uint32_t flags;  /* MOCAP_SENSOR_* */
     uint32_t node_id;
+    int32_t segment; /* mocap_segment the sensor rides on (from the session config) */
+    int32_t state;   /* mocap_sensor_state */
 } mocap_sensor_frame;
 
 /* Frame flags in mocap_frame.flags. */
 enum {
-    MOCAP_FRAME_CALIBRATED = 1u << 0, /* every sensor has a calibration */
+    MOCAP_FRAME_CALIBRATED = 1u << 0, /* every required (not optional) sensor has a calibration */
     MOCAP_FRAME_COMPLETE = 1u << 1    /* every sensor had a fresh sample bracketing the frame */
 };
 
@@ -146,8 +171,10 @@ typedef struct mocap_frame {
     int64_t newest_receive_ns; /* receive time of the newest bytes that fed this frame */
     int64_t emitted_ns;        /* session clock when the frame was produced (latency = diff) */
     uint32_t flags;            /* MOCAP_FRAME_* */
-    uint32_t fresh_mask;       /* bit s set: sensor s had a fresh sample for this frame */
-    mocap_sensor_frame sensors[MOCAP_SENSOR_COUNT];
+    uint32_t fresh_mask;       /* bit i set: sensors[i] had a fresh sample for this frame */
+    uint32_t sensor_count;     /* the session's sensors, in its config order; the rest are zero */
+    uint32_t reserved;
+    mocap_sensor_frame sensors[MOCAP_MAX_SENSORS];
 } mocap_frame;
 
 /* ------------------------------------------------------------------------------------------ */
@@ -177,7 +204,16 @@ typedef struct mocap_session_config {
     uint32_t baud;            /* serial only; any rate the OS accepts (default 460800) */
     uint16_t hid_vendor_id;   /* HID only, when path is empty */
     uint16_t hid_product_id;
-    int32_t node_ids[MOCAP_SENSOR_COUNT]; /* node id of the sensor on each segment, -1 = none */
+    /* The sensor set: sensor i rides on segment sensor_segments[i] and sends as HiPNUC node
+     * node_ids[i] (0..255). Frames, calibration and reports list the sensors in this order.
+     * Each segment and node id at most once. */
+    uint32_t sensor_count;    /* 1 .. MOCAP_MAX_SENSORS (default: the default set, 6) */
+    int32_t sensor_segments[MOCAP_MAX_SENSORS]; /* mocap_segment */
+    int32_t node_ids[MOCAP_MAX_SENSORS];
+    /* bit i: sensor i may be missing. Calibration leaves a missing optional sensor out instead of
+     * refusing, and MOCAP_FRAME_CALIBRATED does not wait for it. Set it from the model's optional
+     * sensors (mocap_model_info.sensor_required_mask). Default 0. */
+    uint32_t optional_mask;
     int32_t imusol_layout;    /* mocap_imusol_layout */
     int32_t world_frame;      /* mocap_world_frame: only used before calibration, see docs */
     float output_rate_hz;     /* output frame rate (default 60) */
@@ -191,7 +227,8 @@ typedef struct mocap_session_config {
     char capture_path[MOCAP_PATH_MAX]; /* if non-empty, record the raw byte stream here */
 } mocap_session_config;
 
-/* Fill a config with defaults (struct_size set, 460800 baud, node ids 0..5, 60 Hz ...).
+/* Fill a config with defaults (struct_size set, 460800 baud, the default sensor set in segment
+ * order with each segment's default node id, 60 Hz ...).
  * Any thread. */
 MOCAP_API mocap_status mocap_config_defaults(mocap_session_config *config);
 
@@ -263,7 +300,7 @@ typedef struct mocap_session_stats {
                                        they held is missing from the frames) */
     int32_t connection_state;     /* mocap_connection_state */
     int32_t capture_error;        /* mocap_status of the capture writer (0 = fine) */
-    uint32_t sensors_seen_mask;   /* bit s: the sensor of segment s produced a sample */
+    uint32_t sensors_seen_mask;   /* bit i: sensor i (config order) produced a sample */
     int32_t replay_tail_damaged;  /* replay: 1 once the capture turned out to end in a damaged or
                                      incomplete chunk (a recording cut short), else 0 */
     char last_error[256];         /* last asynchronous error (device lost, disk full ...) */
@@ -328,6 +365,8 @@ typedef struct mocap_sensor_quality {
     float tilt_deg;            /* heading step: angle between sensor Z and world up */
     uint32_t samples;          /* frames with a fresh sample in the window */
     int32_t ok;                /* 1 if this sensor passed every check */
+    int32_t segment;           /* mocap_segment */
+    int32_t left_out;          /* 1: an optional sensor that sent nothing, left uncalibrated */
 } mocap_sensor_quality;
 
 typedef struct mocap_calibration_report {
@@ -335,23 +374,27 @@ typedef struct mocap_calibration_report {
     int32_t state;             /* mocap_calibration_state */
     float progress;            /* 0..1 through the collection window */
     float seconds_remaining;
-    mocap_sensor_quality sensors[MOCAP_SENSOR_COUNT];
+    uint32_t sensor_count;     /* the session's sensors, config order */
+    mocap_sensor_quality sensors[MOCAP_MAX_SENSORS];
     char reason[256];          /* why it was refused, naming the sensor(s) */
 } mocap_calibration_report;
 
-/* The result of calibration: everything needed to turn raw sensor data into model-frame data. */
+/* The result of calibration: everything needed to turn raw sensor data into model-frame data.
+ * Entry i belongs to the sensor on segments[i]; mocap_calibration_set applies each entry to the
+ * session's sensor on the same segment, so a saved calibration survives a reordered config. */
 typedef struct mocap_calibration {
     uint32_t struct_size;
-    uint32_t valid_mask;   /* bit s: heading and T-pose both done for segment s */
-    uint32_t heading_mask; /* bit s: heading done for segment s */
-    uint32_t reserved;
+    uint32_t sensor_count;
+    uint32_t valid_mask;   /* bit i: heading and T-pose both done for entry i */
+    uint32_t heading_mask; /* bit i: heading done for entry i */
+    int32_t segments[MOCAP_MAX_SENSORS];
     /* Sensor world -> model frame (a yaw about world up, then Z-up to Y-up), row-major. */
-    float world_to_model[MOCAP_SENSOR_COUNT][9];
+    float world_to_model[MOCAP_MAX_SENSORS][9];
     /* Sensor frame -> bone frame (the mounting rotation), row-major. */
-    float sensor_to_bone[MOCAP_SENSOR_COUNT][9];
+    float sensor_to_bone[MOCAP_MAX_SENSORS][9];
     /* Mean model-frame specific force during the T-pose, subtracted from every frame (gravity
      * plus bias), m/s^2. */
-    float acceleration_offset[MOCAP_SENSOR_COUNT][3];
+    float acceleration_offset[MOCAP_MAX_SENSORS][3];
 } mocap_calibration;
 
 /* Schedule a calibration step over the window [start_s, start_s + duration_s] of the session
@@ -375,7 +418,9 @@ MOCAP_API mocap_status mocap_calibration_get_step_report(mocap_session *session,
                                                          mocap_calibration_report *out);
 /* Copy the calibration in use. Any thread. */
 MOCAP_API mocap_status mocap_calibration_get(mocap_session *session, mocap_calibration *out);
-/* Replace the calibration in use (e.g. loaded from a file). Any thread. */
+/* Replace the calibration in use (e.g. loaded from a file): each of the session's sensors takes
+ * the entry of its segment, and one without an entry becomes uncalibrated. A calibration that
+ * shares no segment with the session is refused. Any thread. */
 MOCAP_API mocap_status mocap_calibration_set(mocap_session *session, const mocap_calibration *cal);
 
 /* Save/load a calibration as a small versioned text file. Any thread. */
@@ -410,7 +455,10 @@ typedef struct mocap_model_options {
 
 /* What a model's metadata says (validated against the contract at load). */
 typedef struct mocap_model_info {
-    int32_t contract_version;
+    int32_t contract_version;     /* 1 (six fixed sensors) or 2 (its own sensor set, with a mask) */
+    uint32_t sensor_count;        /* the model's sensors, in its input order */
+    int32_t sensor_segments[MOCAP_MAX_SENSORS]; /* mocap_segment of input sensor k */
+    uint32_t sensor_required_mask;/* bit k: the model needs sensor k; the others may be missing */
     float frame_rate;
     int32_t state_layers;
     int32_t state_size;
@@ -441,7 +489,8 @@ typedef struct mocap_solver_config {
     float contact_threshold;   /* foot_contact probability that counts as planted (0.5) */
     float floor_height;        /* metres, model frame (0) */
     int32_t drift_correction;  /* 1: planted feet do not slide and stay on the floor (default) */
-    int32_t require_calibration; /* 1: only calibrated frames are solved (default) */
+    int32_t require_calibration; /* 1: only frames whose model-required sensors are calibrated
+                                    are solved (default) */
     /* Output smoothing, a one-euro filter per joint rotation: the cut-off frequency is
      * smoothing_min_cutoff_hz for a joint at rest and rises by smoothing_beta Hz per rad/s of the
      * joint's speed, so slow motion loses its jitter and fast motion does not lag.
@@ -455,7 +504,7 @@ enum {
     MOCAP_POSE_CONTACT_LEFT = 1u << 0,
     MOCAP_POSE_CONTACT_RIGHT = 1u << 1,
     MOCAP_POSE_CORRECTED = 1u << 2,   /* drift correction moved the root this frame */
-    MOCAP_POSE_INCOMPLETE = 1u << 3   /* some sensor was held or stale in the input frame */
+    MOCAP_POSE_INCOMPLETE = 1u << 3   /* some model sensor was held, silent or missing */
 };
 
 /* One solved pose of one character. Rotations are quaternions (w,x,y,z). */
@@ -478,7 +527,10 @@ typedef struct mocap_pose {
 typedef struct mocap_solver mocap_solver;
 
 MOCAP_API mocap_status mocap_solver_config_defaults(mocap_solver_config *config);
-/* config may be NULL. The model must stay open while the solver lives. */
+/* config may be NULL. The model must stay open while the solver lives. A character's session
+ * must carry every sensor the model requires (by segment; refused naming the missing segment);
+ * a model's optional sensor the session lacks is always fed as missing. A contract-2 model gets
+ * a mask: 1 for a sensor that is calibrated and fresh or holding, else 0 with zero inputs. */
 MOCAP_API mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *config,
                                          mocap_solver **out);
 /* Before mocap_solver_start. The solver becomes the consumer of the session's frames (do not

@@ -36,7 +36,7 @@ def main() -> int:
         if not folder.is_dir():
             print(f"FAIL layer {layer} has no folder src/{layer}")
             return 1
-        for header in folder.glob("*.h"):
+        for header in [*folder.glob("*.h"), *folder.glob("*.def")]:
             where[header.name] = layer
     for header in (native / "devkit").glob("*.h"):
         where[header.name] = "devkit"

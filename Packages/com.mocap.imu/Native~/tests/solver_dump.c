@@ -28,11 +28,16 @@ typedef struct tap_log {
     int failed;
 } tap_log;
 
-static void tap(void *user, int32_t character, const mocap_frame *frame, const float ori[54],
-                const float acc[18])
+/* The golden records hold a contract-1 model's inputs: six sensors, no mask. */
+static void tap(void *user, int32_t character, const mocap_frame *frame, const float *ori,
+                const float *acc, const float *mask, int sensor_count)
 {
     tap_log *log = (tap_log *)user;
     (void)character;
+    if (mask || sensor_count != 6) {
+        log->failed = 1;
+        return;
+    }
     if (log->count == log->cap) {
         size_t cap = log->cap ? log->cap * 2 : 1024;
         input_record *p = (input_record *)realloc(log->items, cap * sizeof *p);

@@ -140,13 +140,20 @@ TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
         {"wrong_rank.onnx", "'imu_orientation' has rank 3, the contract needs rank 5"},
         {"missing_metadata.onnx", "'mocap.contract_version' is missing"},
         {"missing_joint_names.onnx", "'mocap.joint_names' is missing"},
-        {"wrong_version.onnx", "mocap.contract_version is '2'"},
+        {"wrong_version.onnx", "mocap.contract_version is '3'"},
         {"state_mismatch.onnx", "mocap.state_layers"},
         {"fixed_batch.onnx", "dimension 0 (B) is fixed to 1"},
         {"wrong_joint_name.onnx", "'left_forearm'"},
         {"wrong_output_shape.onnx", "output 'joint_rotations' dimension 2 (24) is 12"},
         // Only the probe run sees this rank; its message must not print dims it never read.
         {"rank_nine_output.onnx", "output 'foot_contact' came out as a rank-9 tensor"},
+        // Contract 2: the sensor list and the mask.
+        {"v2_unknown_segment.onnx", "'tail' is not a segment this engine knows"},
+        {"v2_required_length.onnx", "mocap.sensor_required has 6 entries for the 7 sensors"},
+        {"v2_missing_mask.onnx", "input 'imu_mask' is missing"},
+        {"v1_with_mask.onnx", "unexpected input 'imu_mask'"},
+        {"v2_wrong_sensor_dim.onnx", "dimension 2 (N) is 6, the contract needs 7 (mocap.sensor_order)"},
+        {"v2_duplicate_segment.onnx", "names 'head' twice"},
     };
     for (const auto &c : cases) {
         Opened o;
@@ -185,6 +192,58 @@ TEST(OnnxRuntime, ReadsMetadata)
     EXPECT_NEAR(info->rest_offsets[0][1], 0.93f, 1e-6);
     EXPECT_STREQ(info->precision, "fp32");
     EXPECT_STREQ(info->model_name, "fixture");
+    // Contract 1 is the six default sensors, all required, no mask.
+    EXPECT_EQ(info->sensor_count, 6);
+    EXPECT_EQ(info->required_mask, 0x3fu);
+    EXPECT_EQ(info->has_mask, 0);
+    for (int k = 0; k < 6; ++k) EXPECT_EQ(info->sensor_segments[k], k);
+    EXPECT_EQ(ort_stream_mask(nullptr), nullptr);
+}
+
+// A contract-2 model declares its own sensors (here the six plus an optional chest) and takes a
+// mask; its closed-form outputs (make_onnx_fixtures.py, v2_chest) show what reached it.
+TEST(OnnxRuntime, ContractTwoReadsItsSensorSetAndFeedsTheMask)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    Opened o;
+    open_model(dir + "/v2_chest.onnx", o);
+    ASSERT_EQ(o.status, MOCAP_OK) << o.message;
+    const ort_model_info *info = ort_model_get_info(o.model);
+    EXPECT_EQ(info->contract_version, 2);
+    ASSERT_EQ(info->sensor_count, 7);
+    EXPECT_EQ(info->sensor_segments[6], MOCAP_SEGMENT_CHEST);
+    EXPECT_EQ(info->sensor_segments[5], MOCAP_SEGMENT_HEAD);
+    EXPECT_EQ(info->required_mask, 0x3fu);  // the chest is optional
+    EXPECT_EQ(info->has_mask, 1);
+
+    const int B = 2;
+    ort_stream *st = nullptr;
+    ASSERT_EQ(ort_stream_create(o.model, B, 1, &st), MOCAP_OK) << mocap_last_error();
+    ASSERT_NE(ort_stream_mask(st), nullptr);
+    std::vector<float> ori = random_floats((size_t)B * 7 * 9, 5, 1.0f);
+    std::vector<float> acc = random_floats((size_t)B * 7 * 3, 6, 2.0f);
+    std::memcpy(ort_stream_orientation(st), ori.data(), ori.size() * sizeof(float));
+    std::memcpy(ort_stream_acceleration(st), acc.data(), acc.size() * sizeof(float));
+    const float mask[B][7] = {{1, 1, 1, 1, 1, 1, 1}, {1, 1, 0, 1, 1, 1, 0}};
+    std::memcpy(ort_stream_mask(st), mask, sizeof mask);
+    ASSERT_EQ(ort_stream_run(st), MOCAP_OK) << mocap_last_error();
+    for (int b = 0; b < B; ++b) {
+        const float *v = ort_stream_root_velocity(st) + b * 3;
+        const float *rot = ort_stream_joint_rotations(st) + (size_t)b * 216;
+        float sum = 0;
+        for (int k = 0; k < 7; ++k) sum += mask[b][k];
+        EXPECT_FLOAT_EQ(v[0], sum) << b;
+        EXPECT_FLOAT_EQ(v[1], mask[b][6]) << b;
+        EXPECT_FLOAT_EQ(v[2], acc[((size_t)b * 7 + 6) * 3 + 1]) << b;
+        for (int k = 0; k < 9; ++k) {
+            EXPECT_EQ(rot[k], ori[(size_t)b * 63 + k]) << b;  // joint 0 = sensor 0
+            const float identity = (k % 4 == 0) ? 1.0f : 0.0f;
+            const float chest = mask[b][6] ? ori[(size_t)b * 63 + 54 + k] : identity;
+            EXPECT_FLOAT_EQ(rot[9 * 9 + k], chest) << b;  // joint 9 = the chest when present
+        }
+    }
+    ort_stream_destroy(st);
 }
 
 TEST(OnnxRuntime, CudaWithoutCudaBuildIsRefusedClearly)
@@ -394,7 +453,7 @@ TEST(OnnxRuntime, MocapctlInferStreamMatchesWholeClip)
     EXPECT_NE(info.find("layers 2, size 4"), std::string::npos) << info;
     std::string bad = run_capture(std::string(MOCAP_MOCAPCTL) + " model-info " + dir +
                                   "/wrong_version.onnx 2>&1");
-    EXPECT_NE(bad.find("contract_version is '2'"), std::string::npos) << bad;
+    EXPECT_NE(bad.find("contract_version is '3'"), std::string::npos) << bad;
     EXPECT_EQ(bad.find("rc=0"), std::string::npos) << bad;
     // A mistyped MOCAP_ONNXRUNTIME_PATH is an error naming it, not a quiet fall back to the
     // fetched build (which would have loaded here).

@@ -4,12 +4,15 @@
 // Skips only when ONNX Runtime cannot be loaded.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -64,6 +67,31 @@ struct Sessions {
         for (auto *s : list) mocap_session_close(s);
     }
 };
+
+// A hand-made frame of the default six sensors, each calibrated and fresh, at rest.
+mocap_frame calibrated_six_frame()
+{
+    mocap_frame f;
+    memset(&f, 0, sizeof f);
+    f.flags = MOCAP_FRAME_CALIBRATED | MOCAP_FRAME_COMPLETE;
+    f.sensor_count = 6;
+    for (int s = 0; s < 6; ++s) {
+        f.sensors[s].segment = s;
+        f.sensors[s].state = MOCAP_SENSOR_FRESH;
+        f.sensors[s].flags = MOCAP_SENSOR_VALID | MOCAP_SENSOR_CALIBRATED;
+        f.sensors[s].bone_orientation[0] = 1.0f;
+    }
+    f.fresh_mask = 0x3f;
+    return f;
+}
+
+// The same frame with no sensor calibrated.
+mocap_frame uncalibrated(mocap_frame f)
+{
+    f.flags &= ~(uint32_t)MOCAP_FRAME_CALIBRATED;
+    for (uint32_t s = 0; s < f.sensor_count; ++s) f.sensors[s].flags &= ~(uint32_t)MOCAP_SENSOR_CALIBRATED;
+    return f;
+}
 
 mocap_status open_model(const std::string &path, mocap_model **out)
 {
@@ -431,7 +459,7 @@ TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion
               MOCAP_ERR_UNSUPPORTED);
     EXPECT_NE(std::string(mocap_last_error()).find("session counter 15 is not known"), std::string::npos)
         << mocap_last_error();
-    EXPECT_NE(std::string(mocap_last_error()).find("API 5.1"), std::string::npos) << mocap_last_error();
+    EXPECT_NE(std::string(mocap_last_error()).find("API 6.0"), std::string::npos) << mocap_last_error();
     EXPECT_EQ(value, 7u);
     EXPECT_EQ(mocap_session_get_counter(sessions.list[0], -1, &value), MOCAP_ERR_UNSUPPORTED);
     EXPECT_EQ(mocap_solver_get_counter(solver.s, -1, MOCAP_SOLVER_COUNTER_COUNT, &value), MOCAP_ERR_UNSUPPORTED);
@@ -698,10 +726,7 @@ TEST(Solver, InferenceFailuresAreCountedWithTheirCause)
     ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
     ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
 
-    mocap_frame f;
-    memset(&f, 0, sizeof f);
-    f.flags = MOCAP_FRAME_CALIBRATED | MOCAP_FRAME_COMPLETE;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) f.sensors[s].bone_orientation[0] = 1.0f;
+    mocap_frame f = calibrated_six_frame();
     std::vector<mocap_frame> frames(5, f);
     frames[2].sensors[3].bone_acceleration[1] = 80.0f;  // an impact the model cannot run
     frames[3].sensors[0].bone_acceleration[0] = -60.0f;
@@ -740,19 +765,18 @@ TEST(Solver, InferenceFailuresAreCountedWithTheirCause)
 // and the recurrent state never sees it.
 TEST(Solver, NonFiniteInputFramesAreNotFed)
 {
-    mocap_frame f;
-    memset(&f, 0, sizeof f);
-    f.flags = MOCAP_FRAME_CALIBRATED | MOCAP_FRAME_COMPLETE;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    mocap_frame f = calibrated_six_frame();
+    for (int s = 0; s < 6; ++s) {
         double q[4], axis[3] = {0.3, 1.0, -0.2};
         quat_from_axis_angle(q, axis, 0.2 * (s + 1));
         quat_normalize(q);
         for (int k = 0; k < 4; ++k) f.sensors[s].bone_orientation[k] = (float)q[k];
         for (int k = 0; k < 3; ++k) f.sensors[s].bone_acceleration[k] = 0.5f * (k + 1) - s;
     }
+    const int8_t slots[6] = {0, 1, 2, 3, 4, 5};
     float ori[54], acc[18];
-    ASSERT_EQ(solver_frame_input(&f, ori, acc), 0);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    ASSERT_EQ(solver_frame_input(&f, slots, 6, 0, ori, acc, nullptr), 0);
+    for (int s = 0; s < 6; ++s) {
         double q[4], m[9];
         for (int k = 0; k < 4; ++k) q[k] = f.sensors[s].bone_orientation[k];
         quat_to_mat3(m, q);
@@ -761,13 +785,13 @@ TEST(Solver, NonFiniteInputFramesAreNotFed)
     }
     mocap_frame bad = f;
     bad.sensors[4].bone_orientation[2] = NAN;
-    EXPECT_EQ(solver_frame_input(&bad, ori, acc), -1);
+    EXPECT_EQ(solver_frame_input(&bad, slots, 6, 0, ori, acc, nullptr), -1);
     bad = f;
     bad.sensors[0].bone_acceleration[1] = INFINITY;
-    EXPECT_EQ(solver_frame_input(&bad, ori, acc), -1);
+    EXPECT_EQ(solver_frame_input(&bad, slots, 6, 0, ori, acc, nullptr), -1);
     bad = f;
     memset(bad.sensors[5].bone_orientation, 0, sizeof bad.sensors[5].bone_orientation);
-    EXPECT_EQ(solver_frame_input(&bad, ori, acc), -1);
+    EXPECT_EQ(solver_frame_input(&bad, slots, 6, 0, ori, acc, nullptr), -1);
 
     // Through the solver's tick (no thread: solver_prepare + solver_solve).
     REQUIRE_ORT();
@@ -786,7 +810,7 @@ TEST(Solver, NonFiniteInputFramesAreNotFed)
     std::vector<mocap_frame> frames(6, f);
     frames[2].sensors[3].bone_acceleration[0] = NAN;
     frames[3].sensors[1].bone_orientation[0] = INFINITY;
-    frames[5].flags = 0;  // not calibrated: skipped
+    frames[5] = uncalibrated(frames[5]);  // skipped
     for (size_t i = 0; i < frames.size(); ++i) {
         frames[i].sequence = i;
         frames[i].time_s = 10.0 + i / 60.0;
@@ -901,8 +925,17 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->offset, e.offset) << e.s << "." << e.f;
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
-    EXPECT_EQ(mocap_api_version(), 5);   // 5: replay damage in mocap_session_stats
-    EXPECT_EQ(mocap_api_version_minor(), 1);  // 5.1: counters by key
+    EXPECT_EQ(mocap_api_version(), 6);        // 6: sensor sets (counts, segments, states)
+    EXPECT_EQ(mocap_api_version_minor(), 0);
+    // The sensor-set fields a binding mirrors are in the table too.
+    const mocap_field_layout *count = find("mocap_frame", "sensor_count");
+    ASSERT_NE(count, nullptr);
+    EXPECT_EQ(count->offset, offsetof(mocap_frame, sensor_count));
+    const mocap_field_layout *sensors = find("mocap_frame", "sensors");
+    ASSERT_NE(sensors, nullptr);
+    EXPECT_EQ(sensors->size, MOCAP_MAX_SENSORS * sizeof(mocap_sensor_frame));
+    ASSERT_NE(find("mocap_model_info", "sensor_required_mask"), nullptr);
+    ASSERT_NE(find("mocap_session_config", "optional_mask"), nullptr);
 }
 
 // A consumer that stops polling for longer than the pose ring holds gets the newest pose from
@@ -960,4 +993,262 @@ TEST_F(SolverOnShippedModel, PollAfterALongPauseReturnsTheNewestPose)
     uint32_t n = 99;
     EXPECT_EQ(mocap_solver_drain(solver.s, 0, &pose, 1, &n), MOCAP_ERR_END_OF_STREAM);
     EXPECT_EQ(n, 0u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sensor sets: a session carrying more sensors than the six, and a contract-2 model with an
+// optional chest sensor.
+
+namespace {
+
+// The default six plus a chest sensor on node 6, with the usual calibration prelude.
+synth_config seven_sensor_capture(uint64_t seed, double motion_s, const std::string &path,
+                                  const char *motion = "mixed")
+{
+    synth_config cfg;
+    synth_config_defaults(&cfg);
+    cfg.seed = seed;
+    cfg.heading_s = 2.0;
+    cfg.strap_s = 1.0;
+    cfg.tpose_s = 2.0;
+    cfg.motion_s = motion_s;
+    add_realistic_noise(cfg);
+    cfg.sensor_count = 7;
+    cfg.segments[6] = MOCAP_SEGMENT_CHEST;
+    cfg.node_ids[6] = 6;
+    EXPECT_EQ(synth_write_capture(&cfg, synth_builtin_motion(motion), nullptr, path.c_str(), nullptr),
+              MOCAP_OK) << mocap_last_error();
+    return cfg;
+}
+
+// A replay whose session carries the first `count` sensors of the default set, plus the chest
+// on node 6 when with_chest; calibration scheduled as open_replay does.
+mocap_session *open_replay_sensors(const std::string &path, const synth_config &cfg, uint32_t count,
+                                   bool with_chest, uint32_t optional_mask = 0)
+{
+    mocap_session_config c;
+    mocap_config_defaults(&c);
+    c.source_kind = MOCAP_SOURCE_REPLAY;
+    snprintf(c.path, sizeof c.path, "%s", path.c_str());
+    c.sensor_count = count;
+    if (with_chest) {
+        c.sensor_segments[c.sensor_count] = MOCAP_SEGMENT_CHEST;
+        c.node_ids[c.sensor_count] = 6;
+        c.sensor_count++;
+    }
+    c.optional_mask = optional_mask;
+    mocap_session *s = nullptr;
+    EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_OK) << mocap_last_error();
+    if (!s) return nullptr;
+    double t0 = synth_session_time(&cfg, 0.0);
+    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
+                                         (float)(cfg.heading_s - 1.0)), MOCAP_OK);
+    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_TPOSE,
+                                         t0 + cfg.heading_s + cfg.strap_s + 0.5,
+                                         (float)(cfg.tpose_s - 1.0)), MOCAP_OK);
+    return s;
+}
+
+struct ChestTap {
+    std::map<uint64_t, std::array<float, 4>> chest;  // frame sequence -> chest bone orientation
+    std::map<uint64_t, std::vector<float>> mask;
+    int sensors = 0;
+};
+
+void chest_tap(void *user, int32_t, const mocap_frame *frame, const float *, const float *,
+               const float *mask, int sensor_count)
+{
+    ChestTap *t = static_cast<ChestTap *>(user);
+    t->sensors = sensor_count;
+    for (uint32_t i = 0; i < frame->sensor_count; ++i)
+        if (frame->sensors[i].segment == MOCAP_SEGMENT_CHEST)
+            std::copy(frame->sensors[i].bone_orientation, frame->sensors[i].bone_orientation + 4,
+                      t->chest[frame->sequence].begin());
+    if (mask) t->mask[frame->sequence].assign(mask, mask + sensor_count);
+}
+
+// Runs one session through a fresh solver of `model` to the end; smoothing off, so the poses are
+// the model's own outputs.
+std::vector<mocap_pose> solve_to_end(mocap_model *model, mocap_session *session, ChestTap *tap)
+{
+    mocap_solver_config sc;
+    mocap_solver_config_defaults(&sc);
+    sc.smoothing_min_cutoff_hz = 0.0f;
+    Solver solver;
+    EXPECT_EQ(mocap_solver_open(model, &sc, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    EXPECT_EQ(mocap_solver_add_character(solver.s, session, &ch), MOCAP_OK) << mocap_last_error();
+    if (tap) solver_set_input_tap(solver.s, chest_tap, tap);
+    EXPECT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
+    EXPECT_EQ(mocap_session_start(session), MOCAP_OK);
+    std::vector<std::vector<mocap_pose>> poses;
+    EXPECT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    return poses.empty() ? std::vector<mocap_pose>{} : poses[0];
+}
+
+}  // namespace
+
+// The chest reaches a contract-2 model: the fixture copies it into joint 9 and reports the mask
+// and the chest's acceleration in root_velocity (make_onnx_fixtures.py, v2_chest).
+TEST(SolverSensorSets, ContractTwoModelReceivesTheChestAndItsMask)
+{
+    REQUIRE_ORT();
+    std::string dir = test_temp_dir();
+    ASSERT_TRUE(write_onnx_fixtures(dir));
+    Model model;
+    ASSERT_EQ(open_model(dir + "/v2_chest.onnx", &model.m), MOCAP_OK) << mocap_last_error();
+    mocap_model_info info;
+    ASSERT_EQ(mocap_model_get_info(model.m, &info), MOCAP_OK);
+    EXPECT_EQ(info.contract_version, 2);
+    EXPECT_EQ(info.sensor_count, 7u);
+    EXPECT_EQ(info.sensor_segments[6], MOCAP_SEGMENT_CHEST);
+    EXPECT_EQ(info.sensor_required_mask, 0x3fu);
+
+    std::string cap = dir + "/seven.cap";
+    synth_config cfg = seven_sensor_capture(71, 3.0, cap, "turn");
+    Sessions sessions;
+    sessions.list.push_back(open_replay_sensors(cap, cfg, 6, true));
+    ASSERT_NE(sessions.list[0], nullptr);
+    ChestTap tap;
+    std::vector<mocap_pose> poses = solve_to_end(model.m, sessions.list[0], &tap);
+    ASSERT_GT(poses.size(), (size_t)(cfg.motion_s * 60.0));
+    EXPECT_EQ(tap.sensors, 7);
+    size_t checked = 0;
+    for (const mocap_pose &p : poses) {
+        ASSERT_FLOAT_EQ(p.root_velocity[0], 7.0f) << p.frame_sequence;  // every sensor present
+        ASSERT_FLOAT_EQ(p.root_velocity[1], 1.0f) << p.frame_sequence;  // the chest's mask
+        auto it = tap.chest.find(p.frame_sequence);
+        ASSERT_NE(it, tap.chest.end());
+        // Joint 9 is the chest's calibrated orientation, as the frame carried it.
+        double dot = 0;
+        for (int k = 0; k < 4; ++k) dot += (double)p.joint_rotations[9][k] * it->second[k];
+        ASSERT_GT(std::fabs(dot), 1.0 - 1e-5) << p.frame_sequence;
+        ++checked;
+    }
+    EXPECT_EQ(checked, poses.size());
+    // The chest turns with the body: the check above is not the identity's.
+    double min_w = 1.0;
+    for (const auto &kv : tap.chest) min_w = std::min(min_w, std::fabs((double)kv.second[0]));
+    EXPECT_LT(min_w, 0.99);
+}
+
+// The same model on a session without a chest: the optional sensor is fed as missing (mask 0,
+// zero inputs), and every pose still comes.
+TEST(SolverSensorSets, ContractTwoModelRunsWithoutItsOptionalSensor)
+{
+    REQUIRE_ORT();
+    std::string dir = test_temp_dir();
+    ASSERT_TRUE(write_onnx_fixtures(dir));
+    Model model;
+    ASSERT_EQ(open_model(dir + "/v2_chest.onnx", &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = dir + "/seven.cap";
+    synth_config cfg = seven_sensor_capture(72, 2.0, cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay_sensors(cap, cfg, 6, false));
+    ASSERT_NE(sessions.list[0], nullptr);
+    ChestTap tap;
+    std::vector<mocap_pose> poses = solve_to_end(model.m, sessions.list[0], &tap);
+    ASSERT_GT(poses.size(), (size_t)(cfg.motion_s * 60.0));
+    for (const mocap_pose &p : poses) {
+        ASSERT_FLOAT_EQ(p.root_velocity[0], 6.0f) << p.frame_sequence;
+        ASSERT_FLOAT_EQ(p.root_velocity[1], 0.0f) << p.frame_sequence;
+        ASSERT_FLOAT_EQ(p.root_velocity[2], 0.0f) << p.frame_sequence;  // zero chest input
+        ASSERT_NEAR(std::fabs(p.joint_rotations[9][0]), 1.0f, 1e-6);   // identity for "missing"
+        ASSERT_TRUE(p.flags & MOCAP_POSE_INCOMPLETE);  // a model sensor is missing
+    }
+    ASSERT_FALSE(tap.mask.empty());
+    for (const auto &kv : tap.mask) {
+        ASSERT_EQ(kv.second.size(), 7u);
+        EXPECT_EQ(kv.second[6], 0.0f);
+        for (int k = 0; k < 6; ++k) EXPECT_EQ(kv.second[k], 1.0f);
+    }
+}
+
+// A session without a sensor the model requires is refused when the character is added, naming
+// the segment; a contract-1 model requires all six.
+TEST(SolverSensorSets, MissingRequiredSensorIsRefusedNamingIt)
+{
+    REQUIRE_ORT();
+    std::string dir = test_temp_dir();
+    ASSERT_TRUE(write_onnx_fixtures(dir));
+    std::string cap = dir + "/seven.cap";
+    synth_config cfg = seven_sensor_capture(73, 0.5, cap);
+    for (const char *file : {"v2_chest.onnx", "valid.onnx"}) {
+        Model model;
+        ASSERT_EQ(open_model(dir + "/" + file, &model.m), MOCAP_OK) << mocap_last_error();
+        Sessions sessions;
+        sessions.list.push_back(open_replay_sensors(cap, cfg, 5, true));  // no head
+        ASSERT_NE(sessions.list[0], nullptr);
+        Solver solver;
+        ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK);
+        int32_t ch = -1;
+        EXPECT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_ERR_INVALID_ARGUMENT)
+            << file;
+        std::string err = mocap_last_error();
+        EXPECT_NE(err.find("head"), std::string::npos) << err;
+    }
+}
+
+// What the mask says for each sensor state, and that missing sensors feed zeros.
+TEST(SolverSensorSets, MaskFollowsEachSensorsState)
+{
+    mocap_frame f = calibrated_six_frame();
+    f.sensor_count = 7;
+    f.sensors[6] = f.sensors[0];
+    f.sensors[6].segment = MOCAP_SEGMENT_CHEST;
+    for (uint32_t s = 0; s < 7; ++s) f.sensors[s].bone_acceleration[1] = 1.0f + s;
+    const int8_t slots[7] = {0, 1, 2, 3, 4, 5, 6};
+    float ori[63], acc[21], mask[7];
+    struct Case {
+        int32_t state;
+        uint32_t flags;
+        float expect;
+    } cases[] = {
+        {MOCAP_SENSOR_FRESH, MOCAP_SENSOR_VALID | MOCAP_SENSOR_CALIBRATED, 1.0f},
+        {MOCAP_SENSOR_HOLDING, MOCAP_SENSOR_VALID | MOCAP_SENSOR_HELD | MOCAP_SENSOR_CALIBRATED, 1.0f},
+        {MOCAP_SENSOR_SILENT, MOCAP_SENSOR_VALID | MOCAP_SENSOR_HELD | MOCAP_SENSOR_STALE |
+                                  MOCAP_SENSOR_CALIBRATED, 0.0f},
+        {MOCAP_SENSOR_ABSENT, 0, 0.0f},
+        {MOCAP_SENSOR_FRESH, MOCAP_SENSOR_VALID, 0.0f},  // not calibrated
+    };
+    for (const Case &c : cases) {
+        f.sensors[6].state = c.state;
+        f.sensors[6].flags = c.flags;
+        ASSERT_EQ(solver_frame_input(&f, slots, 7, 1, ori, acc, mask), 0);
+        EXPECT_EQ(mask[6], c.expect) << c.state;
+        EXPECT_EQ(acc[6 * 3 + 1], c.expect ? 7.0f : 0.0f) << c.state;
+        EXPECT_EQ(ori[6 * 9 + 0], c.expect ? 1.0f : 0.0f) << c.state;
+        for (int k = 0; k < 6; ++k) EXPECT_EQ(mask[k], 1.0f);
+    }
+    // A missing sensor's NaN never counts: it is not fed.
+    f.sensors[6].state = MOCAP_SENSOR_SILENT;
+    f.sensors[6].bone_acceleration[0] = NAN;
+    EXPECT_EQ(solver_frame_input(&f, slots, 7, 1, ori, acc, mask), 0);
+    // A model sensor the session lacks (slot -1) is missing.
+    const int8_t no_chest[7] = {0, 1, 2, 3, 4, 5, -1};
+    ASSERT_EQ(solver_frame_input(&f, no_chest, 7, 1, ori, acc, mask), 0);
+    EXPECT_EQ(mask[6], 0.0f);
+}
+
+// An extra sensor in the session changes nothing for a contract-1 model: the same capture solved
+// with the six and with the six plus a chest gives identical poses.
+TEST_F(SolverOnShippedModel, ExtraSensorLeavesAContractOneModelUntouched)
+{
+    std::string cap = test_temp_path("seven.cap");
+    synth_config cfg = seven_sensor_capture(74, 3.0, cap);
+    Sessions six, seven;
+    six.list.push_back(open_replay_sensors(cap, cfg, 6, false));
+    seven.list.push_back(open_replay_sensors(cap, cfg, 6, true));
+    ASSERT_NE(six.list[0], nullptr);
+    ASSERT_NE(seven.list[0], nullptr);
+    std::vector<mocap_pose> a = solve_to_end(model.m, six.list[0], nullptr);
+    std::vector<mocap_pose> b = solve_to_end(model.m, seven.list[0], nullptr);
+    ASSERT_GT(a.size(), (size_t)(cfg.motion_s * 60.0));
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+        ASSERT_EQ(a[i].frame_sequence, b[i].frame_sequence) << i;
+        ASSERT_EQ(0, memcmp(a[i].joint_rotations, b[i].joint_rotations, sizeof a[i].joint_rotations)) << i;
+        ASSERT_EQ(0, memcmp(a[i].root_position, b[i].root_position, sizeof a[i].root_position)) << i;
+        ASSERT_EQ(a[i].flags, b[i].flags) << i;
+    }
 }

@@ -14,9 +14,11 @@
 #include "error.h"
 #include "platform.h"
 #include "mocap_math.h"
+#include "segments.h"
 #include "text_number.h"
 
-#define ALL_SENSORS ((1u << MOCAP_SENSOR_COUNT) - 1u)
+/* Mask of the first n sensors (n <= MOCAP_MAX_SENSORS < 32). */
+static uint32_t first_sensors(uint32_t n) { return (1u << n) - 1u; }
 #define KEPT_MAX 1024u
 /* A forward axis whose horizontal part is below this (it points within 30 deg of vertical) gives
  * no usable heading; the bone's side axis, then nearly horizontal, is used instead. */
@@ -25,17 +27,11 @@
  * edited or corrupted. */
 #define ORTHONORMAL_TOLERANCE 1e-5
 #define CALIB_FILE_HEADER "mocap-calibration"
-#define CALIB_FILE_VERSION 1
-
-static const char *const segment_names[MOCAP_SENSOR_COUNT] = {
-    "pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head"};
-
-const char *mocap_segment_name(int32_t segment)
-{
-    if (segment < 0 || segment >= MOCAP_SENSOR_COUNT)
-        return NULL;
-    return segment_names[segment];
-}
+/* Version 2 lists its sensors by segment name; version 1 (before sensor sets) always held the
+ * six sensors below, in this order, and is still read. */
+#define CALIB_FILE_VERSION 2
+static const char *const VERSION1_SENSORS[] = {"pelvis", "left_wrist", "right_wrist",
+                                               "left_shin", "right_shin", "head"};
 
 static const char *step_name(int32_t step)
 {
@@ -73,9 +69,13 @@ static void conventional_world_to_model(int32_t world_frame, double w[9])
 
 /* ---- collection ---- */
 
-void calib_init(calib_accumulator *acc)
+void calib_init(calib_accumulator *acc, uint32_t sensor_count, const int32_t *segments,
+                uint32_t optional_mask)
 {
     memset(acc, 0, sizeof *acc);
+    acc->sensor_count = sensor_count;
+    memcpy(acc->segments, segments, sensor_count * sizeof *segments);
+    acc->optional_mask = optional_mask & first_sensors(sensor_count);
     acc->step = -1;
     acc->state = MOCAP_CALIBRATION_IDLE;
     acc->start_t = -1.0;
@@ -138,7 +138,7 @@ int calib_add_frame(calib_accumulator *acc, const raw_frame *frame)
         return 1; /* window already over (scheduled in the past, or a gap in the frames) */
     acc->state = MOCAP_CALIBRATION_COLLECTING;
     acc->frames++;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+    for (int s = 0; s < (int)acc->sensor_count; s++) {
         if (!(frame->fresh_mask & (1u << s)))
             continue;
         double q[4];
@@ -237,6 +237,7 @@ mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
     const int32_t step = acc->step;
     memset(report, 0, sizeof *report);
     report->step = step;
+    report->sensor_count = acc->sensor_count;
     report->progress = 1.0f;
     report->seconds_remaining = 0.0f;
     acc->step = -1; /* the window is consumed whatever the outcome */
@@ -250,9 +251,10 @@ mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
         failed = 1;
     }
 
-    uint32_t required = ALL_SENSORS;
+    const uint32_t all = first_sensors(acc->sensor_count);
+    uint32_t required = all;
     if (step == MOCAP_CALIBRATION_HEADING_RESET) {
-        required = cal->valid_mask & ALL_SENSORS;
+        required = cal->valid_mask & all;
         if (required == 0 && !failed) {
             text_append(&reason, " no sensor is calibrated yet (run heading and T-pose first)");
             failed = 1;
@@ -263,9 +265,10 @@ mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
         failed = 1;
     }
 
-    sensor_stats stats[MOCAP_SENSOR_COUNT];
+    sensor_stats stats[MOCAP_MAX_SENSORS];
     const double min_samples = CALIB_MIN_SAMPLE_FRACTION * acc->frames;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+    uint32_t left_out = 0; /* optional sensors that sent nothing: not calibrated, not refused */
+    for (int s = 0; s < (int)acc->sensor_count; s++) {
         sensor_stats *st = &stats[s];
         compute_stats(acc, s, 1, st);
         mocap_sensor_quality *q = &report->sensors[s];
@@ -274,11 +277,18 @@ mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
         q->accel_norm_error = (float)st->accel_norm_error;
         q->tilt_deg = (float)st->tilt_deg;
         q->samples = st->n;
+        q->segment = acc->segments[s];
         q->ok = 1;
         if (!(required & (1u << s)) || acc->frames == 0)
             continue;
+        if (st->n == 0 && (acc->optional_mask & (1u << s))) {
+            q->ok = 0;
+            q->left_out = 1;
+            left_out |= 1u << s;
+            continue;
+        }
 
-        const char *name = segment_names[s];
+        const char *name = segments_name_or(acc->segments[s], "unknown segment");
         int bad = 0;
         if (st->n == 0) {
             text_append(&reason, " %s: no samples;", name);
@@ -323,6 +333,11 @@ mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
         }
     }
 
+    required &= ~left_out;
+    if (!failed && acc->frames > 0 && required == 0) {
+        text_append(&reason, " no sensor sent samples (every configured sensor is optional)");
+        failed = 1;
+    }
     if (failed) {
         /* Drop the trailing separator for a tidy message. */
         if (reason.len > 0 && report->reason[reason.len - 1] == ';')
@@ -334,7 +349,7 @@ mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
 
     /* Everything checked: compute into a copy, then publish, so cal is never half-updated. */
     mocap_calibration next = *cal;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+    for (int s = 0; s < (int)acc->sensor_count; s++) {
         const uint32_t bit = 1u << s;
         if (!(required & bit))
             continue;
@@ -396,6 +411,7 @@ void calib_progress(const calib_accumulator *acc, double now_t, mocap_calibratio
     if (acc->step < 0)
         return; /* idle or finished: calib_finish's report stands */
     report->step = acc->step;
+    report->sensor_count = acc->sensor_count;
     const int started = acc->start_t >= 0.0 && now_t >= acc->start_t &&
                         acc->state == MOCAP_CALIBRATION_COLLECTING;
     if (!started) {
@@ -412,10 +428,11 @@ void calib_progress(const calib_accumulator *acc, double now_t, mocap_calibratio
     }
     /* Live feedback while collecting, so a UI can say which sensor is moving. The spread needs a
      * pass over the kept orientations and is left for calib_finish. */
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+    for (int s = 0; s < (int)acc->sensor_count; s++) {
         sensor_stats st;
         compute_stats(acc, s, 0, &st);
         mocap_sensor_quality *q = &report->sensors[s];
+        q->segment = acc->segments[s];
         q->samples = st.n;
         q->gyro_rms_dps = (float)st.gyro_rms_dps;
         q->accel_norm_error = (float)st.accel_norm_error;
@@ -427,37 +444,46 @@ void calib_progress(const calib_accumulator *acc, double now_t, mocap_calibratio
 
 /* ---- applying ---- */
 
-void calib_identity(mocap_calibration *cal)
+void calib_identity(mocap_calibration *cal, uint32_t sensor_count, const int32_t *segments)
 {
     memset(cal, 0, sizeof *cal);
     cal->struct_size = (uint32_t)sizeof *cal;
+    cal->sensor_count = sensor_count;
+    if (segments) memcpy(cal->segments, segments, sensor_count * sizeof *segments);
     double id[9];
     mat3_identity(id);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+    for (int s = 0; s < MOCAP_MAX_SENSORS; s++) {
         store_mat(cal->world_to_model[s], id);
         store_mat(cal->sensor_to_bone[s], id);
     }
 }
 
-void calib_apply(const mocap_calibration *cal, int32_t world_frame, const raw_frame *in,
-                 mocap_frame *out)
+void calib_apply(const mocap_calibration *cal, int32_t world_frame, uint32_t optional_mask,
+                 const raw_frame *in, mocap_frame *out)
 {
+    const uint32_t n = cal->sensor_count;
+    const uint32_t all = first_sensors(n);
+    const uint32_t required = all & ~optional_mask;
     out->sequence = in->sequence;
     out->time_s = in->t;
-    out->fresh_mask = in->fresh_mask & ALL_SENSORS;
+    out->fresh_mask = in->fresh_mask & all;
+    out->sensor_count = n;
+    out->reserved = 0;
     out->flags = 0;
-    if ((cal->valid_mask & ALL_SENSORS) == ALL_SENSORS)
+    if (required ? (cal->valid_mask & required) == required : (cal->valid_mask & all) != 0)
         out->flags |= MOCAP_FRAME_CALIBRATED;
-    if ((in->fresh_mask & ALL_SENSORS) == ALL_SENSORS)
+    if ((in->fresh_mask & all) == all)
         out->flags |= MOCAP_FRAME_COMPLETE;
+    memset(&out->sensors[n], 0, (MOCAP_MAX_SENSORS - n) * sizeof out->sensors[0]);
 
     double conventional[9];
     conventional_world_to_model(world_frame, conventional);
 
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+    for (uint32_t s = 0; s < n; s++) {
         const uint32_t bit = 1u << s;
         mocap_sensor_frame *o = &out->sensors[s];
         const int valid = (in->valid_mask & bit) != 0;
+        o->segment = cal->segments[s];
         for (int i = 0; i < 4; i++)
             o->sensor_orientation[i] = (float)in->quat[s][i];
         for (int i = 0; i < 3; i++) {
@@ -474,6 +500,10 @@ void calib_apply(const mocap_calibration *cal, int32_t world_frame, const raw_fr
         }
         if (in->stale_mask & bit)
             o->flags |= MOCAP_SENSOR_STALE;
+        o->state = !valid                       ? MOCAP_SENSOR_ABSENT
+                   : (in->stale_mask & bit)     ? MOCAP_SENSOR_SILENT
+                   : !(in->fresh_mask & bit)    ? MOCAP_SENSOR_HOLDING
+                                                : MOCAP_SENSOR_FRESH;
 
         double bone_q[4];
         quat_identity(bone_q);
@@ -522,29 +552,34 @@ typedef struct file_key {
     int which; /* KEY_MASK: 0 valid, 1 heading; KEY_MATRIX: 0 world_to_model, 1 sensor_to_bone */
 } file_key;
 
-#define FILE_KEY_COUNT (2 + 3 * MOCAP_SENSOR_COUNT)
+#define FILE_KEY_MAX (2 + 3 * MOCAP_MAX_SENSORS)
 
-static void set_key(file_key *key, key_kind kind, int segment, int which, const char *suffix)
+/* key->segment is the entry index (not the segment): the entry's name prefixes the key. */
+static void set_key(file_key *key, key_kind kind, const mocap_calibration *cal, int entry,
+                    int which, const char *suffix)
 {
-    if (segment < 0)
+    if (entry < 0)
         snprintf(key->name, sizeof key->name, "%s", suffix);
     else
-        snprintf(key->name, sizeof key->name, "%s.%s", segment_names[segment], suffix);
+        snprintf(key->name, sizeof key->name, "%s.%s",
+                 segments_name_or(cal->segments[entry], "unknown"), suffix);
     key->kind = kind;
-    key->segment = segment;
+    key->segment = entry;
     key->which = which;
 }
 
-static void build_keys(file_key keys[FILE_KEY_COUNT])
+/* The keys a file of cal's sensors holds, in writing order; returns how many. */
+static int build_keys(const mocap_calibration *cal, file_key keys[FILE_KEY_MAX])
 {
     int k = 0;
-    set_key(&keys[k++], KEY_MASK, -1, 0, "valid_mask");
-    set_key(&keys[k++], KEY_MASK, -1, 1, "heading_mask");
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
-        set_key(&keys[k++], KEY_MATRIX, s, 0, "world_to_model");
-        set_key(&keys[k++], KEY_MATRIX, s, 1, "sensor_to_bone");
-        set_key(&keys[k++], KEY_VECTOR, s, 0, "acceleration_offset");
+    set_key(&keys[k++], KEY_MASK, cal, -1, 0, "valid_mask");
+    set_key(&keys[k++], KEY_MASK, cal, -1, 1, "heading_mask");
+    for (int s = 0; s < (int)cal->sensor_count; s++) {
+        set_key(&keys[k++], KEY_MATRIX, cal, s, 0, "world_to_model");
+        set_key(&keys[k++], KEY_MATRIX, cal, s, 1, "sensor_to_bone");
+        set_key(&keys[k++], KEY_VECTOR, cal, s, 0, "acceleration_offset");
     }
+    return k;
 }
 
 /* Largest deviation of m from a proper rotation: |m m^T - I| entries and |det - 1|. */
@@ -579,19 +614,36 @@ static mocap_status open_failure(const char *path, const char *what, int err)
 
 int calib_check(const mocap_calibration *cal, char *why, size_t cap)
 {
-    if ((cal->valid_mask & ~ALL_SENSORS) || (cal->heading_mask & ~ALL_SENSORS)) {
-        snprintf(why, cap, "masks 0x%x/0x%x name sensors beyond %d", (unsigned)cal->valid_mask,
-                 (unsigned)cal->heading_mask, MOCAP_SENSOR_COUNT);
+    if (cal->sensor_count < 1 || cal->sensor_count > MOCAP_MAX_SENSORS) {
+        snprintf(why, cap, "sensor_count %u is outside 1..%d", (unsigned)cal->sensor_count,
+                 MOCAP_MAX_SENSORS);
         return -1;
+    }
+    const uint32_t all = first_sensors(cal->sensor_count);
+    if ((cal->valid_mask & ~all) || (cal->heading_mask & ~all)) {
+        snprintf(why, cap, "masks 0x%x/0x%x name sensors beyond %u", (unsigned)cal->valid_mask,
+                 (unsigned)cal->heading_mask, (unsigned)cal->sensor_count);
+        return -1;
+    }
+    for (uint32_t s = 0; s < cal->sensor_count; s++) {
+        if (!mocap_segment_name(cal->segments[s])) {
+            snprintf(why, cap, "entry %u: segment %d is not a known segment", (unsigned)s,
+                     cal->segments[s]);
+            return -1;
+        }
+        if (segments_index_of(cal->segments, s, cal->segments[s]) >= 0) {
+            snprintf(why, cap, "segment %s appears twice", mocap_segment_name(cal->segments[s]));
+            return -1;
+        }
     }
     if (cal->valid_mask & ~cal->heading_mask) {
         snprintf(why, cap, "valid_mask 0x%x has sensors without a heading (heading_mask 0x%x)",
                  (unsigned)cal->valid_mask, (unsigned)cal->heading_mask);
         return -1;
     }
-    file_key keys[FILE_KEY_COUNT];
-    build_keys(keys);
-    for (int k = 0; k < FILE_KEY_COUNT; k++) {
+    file_key keys[FILE_KEY_MAX];
+    const int key_count = build_keys(cal, keys);
+    for (int k = 0; k < key_count; k++) {
         const file_key *key = &keys[k];
         if (key->kind == KEY_MATRIX) {
             const float *m = key->which == 0 ? cal->world_to_model[key->segment]
@@ -623,12 +675,12 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
 {
     if (!cal || !path || !path[0])
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save: NULL calibration or path");
-    file_key keys[FILE_KEY_COUNT];
-    build_keys(keys);
     /* Refuse to write what calib_load would refuse to read. */
     char why[160];
     if (calib_check(cal, why, sizeof why) != 0)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "calibration save %s: %s", path, why);
+    file_key keys[FILE_KEY_MAX];
+    const int key_count = build_keys(cal, keys);
 
     /* Write a sibling file and rename it over the target, so a crash or a full disk never
      * leaves a half-written calibration behind. The target is the file itself: through a
@@ -661,8 +713,13 @@ mocap_status calib_save(const mocap_calibration *cal, const char *path)
     int ok = fprintf(f, "%s %d\n", CALIB_FILE_HEADER, CALIB_FILE_VERSION) > 0;
     ok = ok && fprintf(f, "# com.mocap.imu calibration. Matrices are row-major; world_to_model maps "
                           "the sensor's Z-up world to the Y-up model frame, sensor_to_bone maps "
-                          "the sensor frame to its bone; acceleration_offset in m/s^2.\n") > 0;
-    for (int k = 0; ok && k < FILE_KEY_COUNT; k++) {
+                          "the sensor frame to its bone; acceleration_offset in m/s^2. Mask bit "
+                          "i is the i-th sensor listed.\n") > 0;
+    ok = ok && fputs("sensors", f) != EOF;
+    for (uint32_t s = 0; ok && s < cal->sensor_count; s++)
+        ok = fprintf(f, " %s", mocap_segment_name(cal->segments[s])) > 0;
+    ok = ok && fputc('\n', f) != EOF;
+    for (int k = 0; ok && k < key_count; k++) {
         const file_key *key = &keys[k];
         if (key->kind == KEY_MASK) {
             ok = fprintf(f, "%s %u\n", key->name,
@@ -737,14 +794,14 @@ mocap_status calib_load(const char *path, mocap_calibration *out)
     if (!f)
         return open_failure(path, "open", errno);
 
-    file_key keys[FILE_KEY_COUNT];
-    build_keys(keys);
-    int seen_line[FILE_KEY_COUNT] = {0};
+    file_key keys[FILE_KEY_MAX];
+    int key_count = 0;
+    int seen_line[FILE_KEY_MAX] = {0};
     mocap_calibration cal;
-    calib_identity(&cal);
+    calib_identity(&cal, 0, NULL);
 
     char line[1024];
-    int line_no = 0, have_header = 0;
+    int line_no = 0, have_header = 0, have_sensors = 0, version = 0;
     mocap_status st = MOCAP_OK;
     while (fgets(line, sizeof line, f)) {
         line_no++;
@@ -759,7 +816,6 @@ mocap_status calib_load(const char *path, mocap_calibration *out)
             line[--len] = '\0';
         if (!have_header) {
             char name[32];
-            int version = 0;
             char extra;
             int fields = sscanf(line, "%31s %d %c", name, &version, &extra);
             if (fields < 1 || strcmp(name, CALIB_FILE_HEADER) != 0) {
@@ -768,14 +824,21 @@ mocap_status calib_load(const char *path, mocap_calibration *out)
                                 "\"%s %d\")", path, line_no, CALIB_FILE_HEADER, CALIB_FILE_VERSION);
                 break;
             }
-            if (fields != 2 || version != CALIB_FILE_VERSION) {
+            if (fields != 2 || version < 1 || version > CALIB_FILE_VERSION) {
                 st = mocap_fail(MOCAP_ERR_FORMAT,
                                 "calibration file %s line %d: unsupported version \"%s\" (this "
-                                "build reads version %d)", path, line_no,
+                                "build reads versions 1..%d)", path, line_no,
                                 line + strlen(CALIB_FILE_HEADER), CALIB_FILE_VERSION);
                 break;
             }
             have_header = 1;
+            if (version == 1) {
+                cal.sensor_count = (uint32_t)(sizeof VERSION1_SENSORS / sizeof VERSION1_SENSORS[0]);
+                for (uint32_t s = 0; s < cal.sensor_count; s++)
+                    cal.segments[s] = mocap_segment_find(VERSION1_SENSORS[s]);
+                key_count = build_keys(&cal, keys);
+                have_sensors = 1;
+            }
             continue;
         }
         const char *p = line;
@@ -784,11 +847,56 @@ mocap_status calib_load(const char *path, mocap_calibration *out)
         if (*p == '\0' || *p == '#')
             continue;
         size_t key_len = strcspn(p, " \t");
+        if (!have_sensors) {
+            if (key_len != 7 || strncmp(p, "sensors", 7) != 0) {
+                st = mocap_fail(MOCAP_ERR_FORMAT,
+                                "calibration file %s line %d: expected the \"sensors\" line "
+                                "before \"%.*s\"", path, line_no,
+                                (int)(key_len > 60 ? 60 : key_len), p);
+                break;
+            }
+            const char *q = p + key_len;
+            for (;;) {
+                while (*q == ' ' || *q == '\t') q++;
+                if (!*q) break;
+                size_t n = strcspn(q, " \t");
+                char name[40];
+                snprintf(name, sizeof name, "%.*s", (int)(n < 39 ? n : 39), q);
+                int32_t seg = mocap_segment_find(name);
+                if (seg < 0 || n >= sizeof name) {
+                    st = mocap_fail(MOCAP_ERR_FORMAT,
+                                    "calibration file %s line %d: \"%s\" is not a segment this "
+                                    "build knows", path, line_no, name);
+                    break;
+                }
+                if (segments_index_of(cal.segments, cal.sensor_count, seg) >= 0 ||
+                    cal.sensor_count == MOCAP_MAX_SENSORS) {
+                    st = mocap_fail(MOCAP_ERR_FORMAT,
+                                    "calibration file %s line %d: %s%s", path, line_no,
+                                    cal.sensor_count == MOCAP_MAX_SENSORS
+                                        ? "more sensors than the engine carries"
+                                        : "a segment is listed twice: ",
+                                    cal.sensor_count == MOCAP_MAX_SENSORS ? "" : name);
+                    break;
+                }
+                cal.segments[cal.sensor_count++] = seg;
+                q += n;
+            }
+            if (st != MOCAP_OK) break;
+            if (cal.sensor_count == 0) {
+                st = mocap_fail(MOCAP_ERR_FORMAT, "calibration file %s line %d: no sensors listed",
+                                path, line_no);
+                break;
+            }
+            key_count = build_keys(&cal, keys);
+            have_sensors = 1;
+            continue;
+        }
         int k = 0;
-        for (; k < FILE_KEY_COUNT; k++)
+        for (; k < key_count; k++)
             if (strlen(keys[k].name) == key_len && strncmp(keys[k].name, p, key_len) == 0)
                 break;
-        if (k == FILE_KEY_COUNT) {
+        if (k == key_count) {
             st = mocap_fail(MOCAP_ERR_FORMAT, "calibration file %s line %d: unknown key \"%.*s\"",
                             path, line_no, (int)(key_len > 60 ? 60 : key_len), p);
             break;
@@ -808,10 +916,10 @@ mocap_status calib_load(const char *path, mocap_calibration *out)
             unsigned long v = strtoul(values, &end, 10);
             while (*end == ' ' || *end == '\t')
                 end++;
-            if (end == values || *end != '\0' || errno != 0 || v > ALL_SENSORS) {
+            if (end == values || *end != '\0' || errno != 0 || v > first_sensors(cal.sensor_count)) {
                 st = mocap_fail(MOCAP_ERR_FORMAT,
                                 "calibration file %s line %d: %s must be an integer 0..%u", path,
-                                line_no, key->name, ALL_SENSORS);
+                                line_no, key->name, first_sensors(cal.sensor_count));
                 break;
             }
             if (key->which == 0)
@@ -852,7 +960,11 @@ mocap_status calib_load(const char *path, mocap_calibration *out)
                           line_no);
     if (!have_header)
         return mocap_fail(MOCAP_ERR_FORMAT, "calibration file %s line 1: empty file", path);
-    for (int k = 0; k < FILE_KEY_COUNT; k++)
+    if (!have_sensors)
+        return mocap_fail(MOCAP_ERR_FORMAT,
+                          "calibration file %s line %d (end of file): the sensors line is missing",
+                          path, line_no + 1);
+    for (int k = 0; k < key_count; k++)
         if (!seen_line[k])
             return mocap_fail(MOCAP_ERR_FORMAT,
                               "calibration file %s line %d (end of file): key %s is missing",

@@ -30,17 +30,21 @@ typedef struct calib_accumulator {
     double start_t;        /* < 0: start at the first frame added */
     double duration;
     uint32_t frames;       /* frames seen inside the window */
-    uint32_t samples[MOCAP_SENSOR_COUNT];
-    double quat_sum[MOCAP_SENSOR_COUNT][4];   /* sign-aligned sums for the mean orientation */
-    double quat_first[MOCAP_SENSOR_COUNT][4];
-    double force_sum[MOCAP_SENSOR_COUNT][3];
-    double gyro_sq_sum[MOCAP_SENSOR_COUNT];
+    uint32_t sensor_count; /* the session's sensor set */
+    int32_t segments[MOCAP_MAX_SENSORS];
+    uint32_t optional_mask;/* sensors that may be missing from a window (left out, not refused) */
+    uint32_t samples[MOCAP_MAX_SENSORS];
+    double quat_sum[MOCAP_MAX_SENSORS][4];   /* sign-aligned sums for the mean orientation */
+    double quat_first[MOCAP_MAX_SENSORS][4];
+    double force_sum[MOCAP_MAX_SENSORS][3];
+    double gyro_sq_sum[MOCAP_MAX_SENSORS];
     /* Orientation spread needs the mean first; the window's orientations are kept (fixed size). */
-    uint32_t kept[MOCAP_SENSOR_COUNT];
-    float kept_quat[MOCAP_SENSOR_COUNT][1024][4];
+    uint32_t kept[MOCAP_MAX_SENSORS];
+    float kept_quat[MOCAP_MAX_SENSORS][1024][4];
 } calib_accumulator;
 
-void calib_init(calib_accumulator *acc);
+void calib_init(calib_accumulator *acc, uint32_t sensor_count, const int32_t *segments,
+                uint32_t optional_mask);
 /* Arm a step for the window [start_t, start_t + duration] (start_t < 0: from the next frame). */
 void calib_begin(calib_accumulator *acc, int32_t step, double start_t, double duration);
 /* Feed every output frame. Returns 1 when the window has just closed (call calib_finish). */
@@ -54,14 +58,16 @@ mocap_status calib_finish(calib_accumulator *acc, mocap_calibration *cal,
 /* Progress report while collecting (state, progress, seconds remaining). */
 void calib_progress(const calib_accumulator *acc, double now_t, mocap_calibration_report *report);
 
-/* Fill a calibration with identity mappings and empty masks. */
-void calib_identity(mocap_calibration *cal);
-/* Fill out->sensors[*] and out->flags from a raw frame and a calibration. world_frame
- * (mocap_world_frame) picks the uncalibrated mapping for sensors without a heading. */
-void calib_apply(const mocap_calibration *cal, int32_t world_frame, const raw_frame *in,
-                 mocap_frame *out);
+/* Fill a calibration of these sensors (segments may be NULL for none) with identity mappings
+ * and empty masks. */
+void calib_identity(mocap_calibration *cal, uint32_t sensor_count, const int32_t *segments);
+/* Fill out->sensors[*] and out->flags from a raw frame and a calibration in the session's sensor
+ * order. world_frame (mocap_world_frame) picks the uncalibrated mapping for sensors without a
+ * heading; optional_mask: sensors MOCAP_FRAME_CALIBRATED does not wait for. */
+void calib_apply(const mocap_calibration *cal, int32_t world_frame, uint32_t optional_mask,
+                 const raw_frame *in, mocap_frame *out);
 
-/* Whether cal is a calibration the engine can use and write: masks within the six sensors, a
+/* Whether cal is a calibration the engine can use and write: a known sensor set, masks within it, a
  * heading for every fully calibrated sensor, rotation matrices, finite offsets. 0, or -1 with
  * the reason (naming the field) in why. */
 int calib_check(const mocap_calibration *cal, char *why, size_t cap);

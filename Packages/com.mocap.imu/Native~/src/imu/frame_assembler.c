@@ -77,7 +77,7 @@ void assembler_init(frame_assembler *a, double rate_hz, double hold_latency_s, d
 
 int assembler_is_newer(const frame_assembler *a, int segment, double t)
 {
-    if (segment < 0 || segment >= MOCAP_SENSOR_COUNT || !isfinite(t)) return 0;
+    if (segment < 0 || segment >= MOCAP_MAX_SENSORS || !isfinite(t)) return 0;
     const sensor_track *k = &a->tracks[segment];
     const imu_sample *newest = track_newest(k);
     return !newest || t > newest->t;
@@ -85,7 +85,7 @@ int assembler_is_newer(const frame_assembler *a, int segment, double t)
 
 void assembler_push(frame_assembler *a, const imu_sample *s)
 {
-    if (s->segment < 0 || s->segment >= MOCAP_SENSOR_COUNT || !isfinite(s->t))
+    if (s->segment < 0 || s->segment >= MOCAP_MAX_SENSORS || !isfinite(s->t))
         return;
     sensor_track *k = &a->tracks[s->segment];
     const imu_sample *newest = track_newest(k);
@@ -163,7 +163,7 @@ static void emit(frame_assembler *a, const track_view *views, double t, raw_fram
     memset(out, 0, sizeof(*out));
     out->sequence = a->sequence++;
     out->t = t;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+    for (int s = 0; s < MOCAP_MAX_SENSORS; s++) {
         quat_identity(out->quat[s]);
         if (a->tracks[s].seen && a->tracks[s].count)
             fill_sensor(a, s, &views[s], t, out);
@@ -177,11 +177,11 @@ int assembler_next(frame_assembler *a, double now_s, raw_frame *out)
         return 0;
     for (;;) {
         const double t = a->next_t;
-        track_view views[MOCAP_SENSOR_COUNT];
+        track_view views[MOCAP_MAX_SENSORS];
         int any_valid = 0, any_live = 0, all_arrived = 1;
         double first_new = INFINITY; /* earliest sample after t over all sensors */
 
-        for (int s = 0; s < MOCAP_SENSOR_COUNT; s++) {
+        for (int s = 0; s < MOCAP_MAX_SENSORS; s++) {
             const sensor_track *k = &a->tracks[s];
             views[s].before = views[s].after = NULL;
             if (!k->seen || !k->count)

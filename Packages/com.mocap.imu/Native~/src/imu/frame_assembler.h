@@ -22,11 +22,11 @@ typedef struct raw_frame {
     uint32_t fresh_mask;            /* sensor had samples bracketing t */
     uint32_t valid_mask;            /* sensor has ever produced a sample */
     uint32_t stale_mask;            /* newest sample older than stale_after_s at t */
-    double quat[MOCAP_SENSOR_COUNT][4];        /* sensor -> world */
-    double force_world[MOCAP_SENSOR_COUNT][3]; /* specific force, world frame, m/s^2 */
-    double gyr[MOCAP_SENSOR_COUNT][3];         /* rad/s, sensor frame */
-    double age[MOCAP_SENSOR_COUNT];            /* t - newest sample time (>= 0) */
-    uint32_t node_id[MOCAP_SENSOR_COUNT];
+    double quat[MOCAP_MAX_SENSORS][4];        /* sensor -> world */
+    double force_world[MOCAP_MAX_SENSORS][3]; /* specific force, world frame, m/s^2 */
+    double gyr[MOCAP_MAX_SENSORS][3];         /* rad/s, sensor frame */
+    double age[MOCAP_MAX_SENSORS];            /* t - newest sample time (>= 0) */
+    uint32_t node_id[MOCAP_MAX_SENSORS];
 } raw_frame;
 
 typedef struct sensor_track {
@@ -46,11 +46,11 @@ typedef struct frame_assembler {
                          * one, so until resume_t + stale_after even stale sensors are waited for */
     uint64_t sequence;
     uint64_t out_of_order; /* samples older than the sensor's newest, dropped */
-    sensor_track tracks[MOCAP_SENSOR_COUNT];
+    sensor_track tracks[MOCAP_MAX_SENSORS];
 } frame_assembler;
 
 void assembler_init(frame_assembler *a, double rate_hz, double hold_latency_s, double stale_after_s);
-/* Add a sample (s->segment in [0, MOCAP_SENSOR_COUNT), s->t increasing per sensor). */
+/* Add a sample (s->segment in [0, MOCAP_MAX_SENSORS), s->t increasing per sensor). */
 void assembler_push(frame_assembler *a, const imu_sample *s);
 /* Whether a sample of segment at time t would be taken (newer than the sensor's newest). */
 int assembler_is_newer(const frame_assembler *a, int segment, double t);

@@ -65,6 +65,9 @@ mocap_status mocap_model_open(const char *path, const mocap_model_options *optio
     const ort_model_info *oi = ort_model_get_info(m->ort);
     mocap_model_info *info = &m->info;
     info->contract_version = oi->contract_version;
+    info->sensor_count = (uint32_t)oi->sensor_count;
+    info->sensor_required_mask = oi->required_mask;
+    for (int k = 0; k < oi->sensor_count; ++k) info->sensor_segments[k] = oi->sensor_segments[k];
     info->frame_rate = (float)oi->frame_rate;
     info->state_layers = oi->state_layers;
     info->state_size = oi->state_size;

@@ -58,6 +58,7 @@ int ort_stream_batch(const ort_stream *s) { (void)s; return 0; }
 int ort_stream_frames(const ort_stream *s) { (void)s; return 0; }
 float *ort_stream_orientation(ort_stream *s) { (void)s; return NULL; }
 float *ort_stream_acceleration(ort_stream *s) { (void)s; return NULL; }
+float *ort_stream_mask(ort_stream *s) { (void)s; return NULL; }
 const float *ort_stream_joint_rotations(const ort_stream *s) { (void)s; return NULL; }
 const float *ort_stream_root_velocity(const ort_stream *s) { (void)s; return NULL; }
 const float *ort_stream_foot_contact(const ort_stream *s) { (void)s; return NULL; }
@@ -198,9 +199,10 @@ const char *ort_library_path(void) { return g_loaded ? g_path : ""; }
 /* ---------------------------------------------------------------------------------------- */
 /* The contract                                                                                */
 
-static const char *const CONTRACT_SENSORS = "pelvis,left_wrist,right_wrist,left_shin,right_shin,head";
+/* Contract 1 fixed the sensors to these six, in this order. */
+static const char *const CONTRACT1_SENSORS = "pelvis,left_wrist,right_wrist,left_shin,right_shin,head";
 
-enum { DIM_DYNAMIC = -1, DIM_LAYERS = -2, DIM_STATE = -3 };
+enum { DIM_DYNAMIC = -1, DIM_LAYERS = -2, DIM_STATE = -3, DIM_SENSORS = -4 };
 typedef struct tensor_spec {
     const char *name;
     int rank;
@@ -208,14 +210,16 @@ typedef struct tensor_spec {
     const char *dim_names[5];
 } tensor_spec;
 
-enum { IN_ORIENTATION, IN_ACCELERATION, IN_STATE_H, IN_STATE_C, INPUT_COUNT };
+/* The mask comes last: a contract-1 model has the first four inputs only. */
+enum { IN_ORIENTATION, IN_ACCELERATION, IN_STATE_H, IN_STATE_C, IN_MASK, INPUT_COUNT };
 enum { OUT_ROTATIONS, OUT_VELOCITY, OUT_CONTACT, OUT_STATE_H, OUT_STATE_C, OUTPUT_COUNT };
 
 static const tensor_spec INPUT_SPECS[INPUT_COUNT] = {
-    {"imu_orientation", 5, {DIM_DYNAMIC, DIM_DYNAMIC, 6, 3, 3}, {"B", "T", "6", "3", "3"}},
-    {"imu_acceleration", 4, {DIM_DYNAMIC, DIM_DYNAMIC, 6, 3}, {"B", "T", "6", "3"}},
+    {"imu_orientation", 5, {DIM_DYNAMIC, DIM_DYNAMIC, DIM_SENSORS, 3, 3}, {"B", "T", "N", "3", "3"}},
+    {"imu_acceleration", 4, {DIM_DYNAMIC, DIM_DYNAMIC, DIM_SENSORS, 3}, {"B", "T", "N", "3"}},
     {"state_in_h", 3, {DIM_LAYERS, DIM_DYNAMIC, DIM_STATE}, {"L", "B", "H"}},
     {"state_in_c", 3, {DIM_LAYERS, DIM_DYNAMIC, DIM_STATE}, {"L", "B", "H"}},
+    {"imu_mask", 3, {DIM_DYNAMIC, DIM_DYNAMIC, DIM_SENSORS}, {"B", "T", "N"}},
 };
 static const tensor_spec OUTPUT_SPECS[OUTPUT_COUNT] = {
     {"joint_rotations", 5, {DIM_DYNAMIC, DIM_DYNAMIC, 24, 3, 3}, {"B", "T", "24", "3", "3"}},
@@ -225,7 +229,7 @@ static const tensor_spec OUTPUT_SPECS[OUTPUT_COUNT] = {
     {"state_out_c", 3, {DIM_LAYERS, DIM_DYNAMIC, DIM_STATE}, {"L", "B", "H"}},
 };
 static const char *const INPUT_NAMES[INPUT_COUNT] = {"imu_orientation", "imu_acceleration",
-                                                     "state_in_h", "state_in_c"};
+                                                     "state_in_h", "state_in_c", "imu_mask"};
 static const char *const OUTPUT_NAMES[OUTPUT_COUNT] = {"joint_rotations", "root_velocity",
                                                        "foot_contact", "state_out_h",
                                                        "state_out_c"};
@@ -243,9 +247,9 @@ struct ort_stream {
     size_t state_count;
     int parity; /* which state buffer pair feeds the next run */
     float *block; /* one allocation for every buffer below */
-    float *orientation, *acceleration, *rotations, *velocity, *contact;
+    float *orientation, *acceleration, *mask, *rotations, *velocity, *contact;
     float *state_h[2], *state_c[2];
-    OrtValue *v_orientation, *v_acceleration, *v_rotations, *v_velocity, *v_contact;
+    OrtValue *v_orientation, *v_acceleration, *v_mask, *v_rotations, *v_velocity, *v_contact;
     OrtValue *v_state_h[2], *v_state_c[2];
     const OrtValue *inputs[2][INPUT_COUNT];
     OrtValue *outputs[2][OUTPUT_COUNT];
@@ -335,6 +339,49 @@ static const char *const REQUIRED_KEYS[] = {
     "mocap.precision",        "mocap.model_name"};
 #define KEY_COUNT ((int)(sizeof REQUIRED_KEYS / sizeof REQUIRED_KEYS[0]))
 
+/* Contract 2's sensor list: names from the segment table, each once, and which are required
+ * (required_text NULL: all). Fills info's sensor fields; a message names what is wrong. */
+static mocap_status parse_sensor_set(ort_model_info *info, const char *path, char *order_text,
+                                     char *required_text)
+{
+    char *items[MOCAP_MAX_SENSORS + 1];
+    int overflow = 0;
+    int n = split_list(order_text, items, MOCAP_MAX_SENSORS + 1, &overflow);
+    if (n < 1 || n > MOCAP_MAX_SENSORS || overflow)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_order lists %d sensors; the "
+                          "engine carries 1..%d", path, n, MOCAP_MAX_SENSORS);
+    for (int k = 0; k < n; ++k) {
+        int32_t seg = mocap_segment_find(items[k]);
+        if (seg < 0)
+            return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_order[%d] '%s' is not a "
+                              "segment this engine knows", path, k, items[k]);
+        for (int o = 0; o < k; ++o)
+            if (info->sensor_segments[o] == seg)
+                return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_order names '%s' "
+                                  "twice", path, items[k]);
+        info->sensor_segments[k] = seg;
+    }
+    info->sensor_count = n;
+    info->required_mask = (1u << n) - 1u;
+    if (!required_text) return MOCAP_OK;
+    char *flags[MOCAP_MAX_SENSORS + 1];
+    int m = split_list(required_text, flags, MOCAP_MAX_SENSORS + 1, &overflow);
+    if (m != n)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_required has %d entries for "
+                          "the %d sensors of mocap.sensor_order", path, m, n);
+    info->required_mask = 0;
+    for (int k = 0; k < n; ++k) {
+        if (strcmp(flags[k], "1") == 0) info->required_mask |= 1u << k;
+        else if (strcmp(flags[k], "0") != 0)
+            return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_required[%d] is '%s', "
+                              "expected 1 (required) or 0 (optional)", path, k, flags[k]);
+    }
+    if (info->required_mask == 0)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_required makes every sensor "
+                          "optional; at least one must be required", path);
+    return MOCAP_OK;
+}
+
 static mocap_status read_metadata(ort_model *m)
 {
     OrtModelMetadata *md = NULL;
@@ -346,6 +393,7 @@ static mocap_status read_metadata(ort_model *m)
     char *values[KEY_COUNT] = {0};
     mocap_status r = MOCAP_OK;
     for (int k = 0; k < KEY_COUNT; ++k) values[k] = metadata_value(md, alloc, REQUIRED_KEYS[k]);
+    char *required = metadata_value(md, alloc, "mocap.sensor_required");
     g_api->ReleaseModelMetadata(md);
     ort_model_info *info = &m->info;
     const char *path = m->path;
@@ -357,9 +405,10 @@ static mocap_status read_metadata(ort_model *m)
                        "missing (not a mocap pose model, see docs/model-contract.md)", path);
         goto done;
     }
-    if (!parse_int(values[0], &lv) || lv != ORT_CONTRACT_VERSION) {
+    if (!parse_int(values[0], &lv) || lv < ORT_CONTRACT_MIN || lv > ORT_CONTRACT_MAX) {
         r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.contract_version is '%s'; this engine "
-                       "accepts exactly version %d", path, values[0], ORT_CONTRACT_VERSION);
+                       "accepts versions %d..%d", path, values[0], ORT_CONTRACT_MIN,
+                       ORT_CONTRACT_MAX);
         goto done;
     }
     info->contract_version = (int)lv;
@@ -381,12 +430,22 @@ static mocap_status read_metadata(ort_model *m)
         for (const char *p = values[2]; *p && j + 1 < sizeof compact; ++p)
             if (!isspace((unsigned char)*p)) compact[j++] = *p;
         compact[j] = '\0';
-        if (strcmp(compact, CONTRACT_SENSORS) != 0) {
-            r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_order is '%s', the contract "
-                           "needs '%s'", path, values[2], CONTRACT_SENSORS);
-            goto done;
+        if (info->contract_version == 1) {
+            if (strcmp(compact, CONTRACT1_SENSORS) != 0) {
+                r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_order is '%s', contract "
+                               "1 needs '%s'", path, values[2], CONTRACT1_SENSORS);
+                goto done;
+            }
+            if (required) {
+                r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_required belongs to "
+                               "contract 2; contract 1 requires all six sensors", path);
+                goto done;
+            }
         }
         snprintf(info->sensor_order, sizeof info->sensor_order, "%s", compact);
+        r = parse_sensor_set(info, path, values[2], required);
+        if (r != MOCAP_OK) goto done;
+        info->has_mask = info->contract_version >= 2;
     }
     char *items[80];
     int overflow = 0;
@@ -457,11 +516,14 @@ static mocap_status read_metadata(ort_model *m)
     snprintf(info->model_name, sizeof info->model_name, "%s", values[9]);
 done:
     for (int k = 0; k < KEY_COUNT; ++k) free(values[k]);
+    free(required);
     return r;
 }
 
 /* ---------------------------------------------------------------------------------------- */
 /* Input / output validation                                                                   */
+
+static int model_input_count(const ort_model *m) { return m->info.has_mask ? INPUT_COUNT : IN_MASK; }
 
 static mocap_status check_tensor(const ort_model *m, const char *kind, const tensor_spec *spec,
                                  OrtTypeInfo *type)
@@ -501,6 +563,7 @@ static mocap_status check_tensor(const ort_model *m, const char *kind, const ten
         int64_t want = spec->dims[d];
         if (want == DIM_LAYERS) want = m->info.state_layers;
         else if (want == DIM_STATE) want = m->info.state_size;
+        else if (want == DIM_SENSORS) want = m->info.sensor_count;
         if (want == DIM_DYNAMIC) {
             if (dims[d] >= 0)
                 return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s '%s' dimension %d (%s) is fixed "
@@ -509,8 +572,10 @@ static mocap_status check_tensor(const ort_model *m, const char *kind, const ten
         } else if (dims[d] < 0) {
             /* Left symbolic in the file (exporters often do): checked by the probe run. */
         } else if (dims[d] != want) {
-            const char *which = spec->dims[d] == DIM_LAYERS ? " (mocap.state_layers)"
-                                : spec->dims[d] == DIM_STATE ? " (mocap.state_size)" : "";
+            const char *which = spec->dims[d] == DIM_LAYERS    ? " (mocap.state_layers)"
+                                : spec->dims[d] == DIM_STATE   ? " (mocap.state_size)"
+                                : spec->dims[d] == DIM_SENSORS ? " (mocap.sensor_order)"
+                                                               : "";
             return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s '%s' dimension %d (%s) is %lld, the "
                               "contract needs %lld%s (shape %s)", path, kind, spec->name, d,
                               spec->dim_names[d], (long long)dims[d], (long long)want, which,
@@ -524,7 +589,7 @@ static mocap_status check_io(ort_model *m, int outputs)
 {
     const char *kind = outputs ? "output" : "input";
     const tensor_spec *specs = outputs ? OUTPUT_SPECS : INPUT_SPECS;
-    int nspec = outputs ? OUTPUT_COUNT : INPUT_COUNT;
+    int nspec = outputs ? OUTPUT_COUNT : model_input_count(m);
     OrtAllocator *alloc = NULL;
     size_t count = 0;
     OrtStatus *st = g_api->GetAllocatorWithDefaultOptions(&alloc);
@@ -549,21 +614,23 @@ static mocap_status check_io(ort_model *m, int outputs)
         len += (size_t)snprintf(all + len, sizeof all - len, "%s%s", i ? ", " : "", names[i]);
 
     /* A missing name first (the most useful message), then an unexpected one, then types. */
-    int index_of[OUTPUT_COUNT];
+    int index_of[(int)OUTPUT_COUNT > (int)INPUT_COUNT ? (int)OUTPUT_COUNT : (int)INPUT_COUNT];
     for (int k = 0; k < nspec; ++k) {
         index_of[k] = -1;
         for (size_t i = 0; i < listed; ++i)
             if (strcmp(names[i], specs[k].name) == 0) index_of[k] = (int)i;
         if (index_of[k] < 0)
             return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s '%s' is missing (the model's %ss: "
-                              "%s)", m->path, kind, specs[k].name, kind, all);
+                              "%s; contract %d)", m->path, kind, specs[k].name, kind, all,
+                              m->info.contract_version);
     }
     for (size_t i = 0; i < listed; ++i) {
         int known = 0;
         for (int k = 0; k < nspec; ++k) known |= index_of[k] == (int)i;
         if (!known)
             return mocap_fail(MOCAP_ERR_FORMAT, "model %s: unexpected %s '%s' (the model's %ss: "
-                              "%s)", m->path, kind, names[i], kind, all);
+                              "%s; contract %d)", m->path, kind, names[i], kind, all,
+                              m->info.contract_version);
     }
     for (int k = 0; k < nspec; ++k) {
         OrtTypeInfo *type = NULL;
@@ -645,33 +712,43 @@ static void format_dims(char *out, size_t cap, const int64_t *dims, size_t rank)
  * (dimensions a file may leave symbolic are only known here). */
 static mocap_status probe_run(ort_model *m)
 {
-    const int L = m->info.state_layers, H = m->info.state_size;
+    const int L = m->info.state_layers, H = m->info.state_size, N = m->info.sensor_count;
     const size_t nstate = (size_t)L * (size_t)H;
-    float *buf = (float *)calloc(54 + 18 + 2 * nstate, sizeof(float));
+    const size_t n_ori = (size_t)N * 9, n_acc = (size_t)N * 3, n_mask = (size_t)N;
+    float *buf = (float *)calloc(n_ori + n_acc + n_mask + 2 * nstate, sizeof(float));
     if (!buf) return mocap_fail(MOCAP_ERR_NO_MEMORY, "model %s: probe buffers", m->path);
-    for (int s = 0; s < 6; ++s) buf[s * 9 + 0] = buf[s * 9 + 4] = buf[s * 9 + 8] = 1.0f;
-    const int64_t sh_ori[5] = {1, 1, 6, 3, 3}, sh_acc[4] = {1, 1, 6, 3}, sh_state[3] = {L, 1, H};
+    float *ori = buf, *acc = buf + n_ori, *mask = acc + n_acc, *state = mask + n_mask;
+    for (int s = 0; s < N; ++s) {
+        ori[s * 9 + 0] = ori[s * 9 + 4] = ori[s * 9 + 8] = 1.0f;
+        mask[s] = 1.0f;
+    }
+    const int64_t sh_ori[5] = {1, 1, N, 3, 3}, sh_acc[4] = {1, 1, N, 3}, sh_mask[3] = {1, 1, N};
+    const int64_t sh_state[3] = {L, 1, H};
     OrtValue *in[INPUT_COUNT] = {0}, *out[OUTPUT_COUNT] = {0};
     mocap_status r = MOCAP_OK;
-    OrtStatus *st = g_api->CreateTensorWithDataAsOrtValue(m->memory, buf, 54 * sizeof(float), sh_ori,
-                                                          5, ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT,
+    OrtStatus *st = g_api->CreateTensorWithDataAsOrtValue(m->memory, ori, n_ori * sizeof(float),
+                                                          sh_ori, 5, ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT,
                                                           &in[IN_ORIENTATION]);
-    if (!st) st = g_api->CreateTensorWithDataAsOrtValue(m->memory, buf + 54, 18 * sizeof(float),
+    if (!st) st = g_api->CreateTensorWithDataAsOrtValue(m->memory, acc, n_acc * sizeof(float),
                                                         sh_acc, 4, ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT,
                                                         &in[IN_ACCELERATION]);
-    if (!st) st = g_api->CreateTensorWithDataAsOrtValue(m->memory, buf + 72, nstate * sizeof(float),
+    if (!st) st = g_api->CreateTensorWithDataAsOrtValue(m->memory, state, nstate * sizeof(float),
                                                         sh_state, 3, ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT,
                                                         &in[IN_STATE_H]);
-    if (!st) st = g_api->CreateTensorWithDataAsOrtValue(m->memory, buf + 72 + nstate,
+    if (!st) st = g_api->CreateTensorWithDataAsOrtValue(m->memory, state + nstate,
                                                         nstate * sizeof(float), sh_state, 3,
                                                         ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT,
                                                         &in[IN_STATE_C]);
+    if (!st && m->info.has_mask)
+        st = g_api->CreateTensorWithDataAsOrtValue(m->memory, mask, n_mask * sizeof(float), sh_mask,
+                                                   3, ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT,
+                                                   &in[IN_MASK]);
     if (st) {
         r = ort_error(st, MOCAP_ERR_NO_MEMORY, ": probe tensors", m->path);
         goto done;
     }
-    st = g_api->Run(m->session, NULL, INPUT_NAMES, (const OrtValue *const *)in, INPUT_COUNT,
-                    OUTPUT_NAMES, OUTPUT_COUNT, out);
+    st = g_api->Run(m->session, NULL, INPUT_NAMES, (const OrtValue *const *)in,
+                    (size_t)model_input_count(m), OUTPUT_NAMES, OUTPUT_COUNT, out);
     if (st) {
         r = ort_error(st, MOCAP_ERR_FORMAT, ": a one-frame test inference failed", m->path);
         goto done;
@@ -801,9 +878,9 @@ const ort_model_info *ort_model_get_info(const ort_model *m) { return m ? &m->in
 void ort_stream_destroy(ort_stream *s)
 {
     if (!s) return;
-    OrtValue *values[] = {s->v_orientation, s->v_acceleration, s->v_rotations, s->v_velocity,
-                          s->v_contact,     s->v_state_h[0],   s->v_state_h[1], s->v_state_c[0],
-                          s->v_state_c[1]};
+    OrtValue *values[] = {s->v_orientation, s->v_acceleration, s->v_mask,       s->v_rotations,
+                          s->v_velocity,    s->v_contact,      s->v_state_h[0], s->v_state_h[1],
+                          s->v_state_c[0],  s->v_state_c[1]};
     for (size_t i = 0; i < sizeof values / sizeof values[0]; ++i)
         if (values[i]) g_api->ReleaseValue(values[i]);
     free(s->block);
@@ -834,8 +911,10 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
     const int L = m->info.state_layers, H = m->info.state_size;
     const size_t bt = (size_t)batch * (size_t)frames;
     s->state_count = (size_t)L * (size_t)batch * (size_t)H;
-    size_t n_ori = bt * 54, n_acc = bt * 18, n_rot = bt * 216, n_vel = bt * 3, n_con = bt * 2;
-    size_t total = n_ori + n_acc + n_rot + n_vel + n_con + 4 * s->state_count;
+    const size_t N = (size_t)m->info.sensor_count;
+    size_t n_ori = bt * N * 9, n_acc = bt * N * 3, n_mask = m->info.has_mask ? bt * N : 0;
+    size_t n_rot = bt * ORT_JOINTS * 9, n_vel = bt * 3, n_con = bt * 2;
+    size_t total = n_ori + n_acc + n_mask + n_rot + n_vel + n_con + 4 * s->state_count;
     s->block = (float *)calloc(total, sizeof(float));
     if (!s->block) {
         free(s);
@@ -844,6 +923,7 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
     float *p = s->block;
     s->orientation = p; p += n_ori;
     s->acceleration = p; p += n_acc;
+    s->mask = n_mask ? p : NULL; p += n_mask;
     s->rotations = p; p += n_rot;
     s->velocity = p; p += n_vel;
     s->contact = p; p += n_con;
@@ -852,11 +932,13 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
         s->state_c[k] = p; p += s->state_count;
     }
     const int64_t B = batch, T = frames;
-    const int64_t sh_ori[5] = {B, T, 6, 3, 3}, sh_acc[4] = {B, T, 6, 3};
-    const int64_t sh_rot[5] = {B, T, 24, 3, 3}, sh_vel[3] = {B, T, 3}, sh_con[3] = {B, T, 2};
+    const int64_t sh_ori[5] = {B, T, (int64_t)N, 3, 3}, sh_acc[4] = {B, T, (int64_t)N, 3};
+    const int64_t sh_mask[3] = {B, T, (int64_t)N};
+    const int64_t sh_rot[5] = {B, T, ORT_JOINTS, 3, 3}, sh_vel[3] = {B, T, 3}, sh_con[3] = {B, T, 2};
     const int64_t sh_state[3] = {L, B, H};
     OrtStatus *st = wrap(s, s->orientation, n_ori, sh_ori, 5, &s->v_orientation);
     if (!st) st = wrap(s, s->acceleration, n_acc, sh_acc, 4, &s->v_acceleration);
+    if (!st && s->mask) st = wrap(s, s->mask, n_mask, sh_mask, 3, &s->v_mask);
     if (!st) st = wrap(s, s->rotations, n_rot, sh_rot, 5, &s->v_rotations);
     if (!st) st = wrap(s, s->velocity, n_vel, sh_vel, 3, &s->v_velocity);
     if (!st) st = wrap(s, s->contact, n_con, sh_con, 3, &s->v_contact);
@@ -875,6 +957,7 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
         s->inputs[k][IN_ACCELERATION] = s->v_acceleration;
         s->inputs[k][IN_STATE_H] = s->v_state_h[k];
         s->inputs[k][IN_STATE_C] = s->v_state_c[k];
+        s->inputs[k][IN_MASK] = s->v_mask;
         s->outputs[k][OUT_ROTATIONS] = s->v_rotations;
         s->outputs[k][OUT_VELOCITY] = s->v_velocity;
         s->outputs[k][OUT_CONTACT] = s->v_contact;
@@ -889,6 +972,7 @@ int ort_stream_batch(const ort_stream *s) { return s ? s->batch : 0; }
 int ort_stream_frames(const ort_stream *s) { return s ? s->frames : 0; }
 float *ort_stream_orientation(ort_stream *s) { return s ? s->orientation : NULL; }
 float *ort_stream_acceleration(ort_stream *s) { return s ? s->acceleration : NULL; }
+float *ort_stream_mask(ort_stream *s) { return s ? s->mask : NULL; }
 const float *ort_stream_joint_rotations(const ort_stream *s) { return s ? s->rotations : NULL; }
 const float *ort_stream_root_velocity(const ort_stream *s) { return s ? s->velocity : NULL; }
 const float *ort_stream_foot_contact(const ort_stream *s) { return s ? s->contact : NULL; }
@@ -909,8 +993,9 @@ mocap_status ort_stream_run(ort_stream *s)
 {
     if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "ort_stream_run: no stream");
     const int k = s->parity;
-    OrtStatus *st = g_api->Run(s->model->session, NULL, INPUT_NAMES, s->inputs[k], INPUT_COUNT,
-                               OUTPUT_NAMES, OUTPUT_COUNT, s->outputs[k]);
+    OrtStatus *st = g_api->Run(s->model->session, NULL, INPUT_NAMES, s->inputs[k],
+                               (size_t)model_input_count(s->model), OUTPUT_NAMES, OUTPUT_COUNT,
+                               s->outputs[k]);
     if (st) return ort_error(st, MOCAP_ERR_IO, ": inference failed", s->model->path);
     s->parity = 1 - k;
     return MOCAP_OK;

@@ -27,8 +27,10 @@
 extern "C" {
 #endif
 
-#define ORT_CONTRACT_VERSION 1
-#define ORT_SENSORS 6
+/* Contract versions this engine reads: 1 (the six default sensors, no mask) and 2 (the model's
+ * own sensor list from the segment table, with a mask input). */
+#define ORT_CONTRACT_MIN 1
+#define ORT_CONTRACT_MAX 2
 #define ORT_JOINTS 24
 #define ORT_NAME_CAP 32
 
@@ -72,7 +74,11 @@ typedef struct ort_model_info {
     float rest_offsets[ORT_JOINTS][3];       /* metres, model frame; [0] = pelvis height */
     char precision[8];                       /* "fp32" or "fp16" */
     char model_name[128];
-    char sensor_order[128];
+    char sensor_order[256];
+    int sensor_count;                        /* N: the sensor dimension of the inputs */
+    int32_t sensor_segments[MOCAP_MAX_SENSORS];
+    uint32_t required_mask;                  /* bit k: sensor k must be present */
+    int has_mask;                            /* contract 2: the imu_mask input */
 } ort_model_info;
 
 typedef struct ort_model ort_model;
@@ -93,10 +99,12 @@ void ort_stream_destroy(ort_stream *s);
 int ort_stream_batch(const ort_stream *s);
 int ort_stream_frames(const ort_stream *s);
 
-/* Input buffers to fill before ort_stream_run, row-major float32:
- * orientation [B][T][6][3][3] (bone -> model), acceleration [B][T][6][3] (m/s^2). */
+/* Input buffers to fill before ort_stream_run, row-major float32, N = info.sensor_count:
+ * orientation [B][T][N][3][3] (bone -> model), acceleration [B][T][N][3] (m/s^2), mask [B][T][N]
+ * (1 present, 0 missing; NULL for a model without the mask input). */
 float *ort_stream_orientation(ort_stream *s);
 float *ort_stream_acceleration(ort_stream *s);
+float *ort_stream_mask(ort_stream *s);
 /* Results of the last run: rotations [B][T][24][3][3], root velocity [B][T][3],
  * foot contact [B][T][2]. */
 const float *ort_stream_joint_rotations(const ort_stream *s);

@@ -27,6 +27,8 @@ typedef struct character {
     int replay_fast;            /* back-pressure instead of dropping */
     spsc_ring poses;
     float *state_h, *state_c;   /* [L][H] each: this character's recurrent state */
+    /* Model sensor k comes from the session's sensor slot_of[k]; -1: the session has none. */
+    int8_t slot_of[MOCAP_MAX_SENSORS];
 
     /* Solver thread only. */
     mocap_frame buf[FRAME_BUFFER];
@@ -79,8 +81,11 @@ struct mocap_solver {
     const mocap_frame *tick_frames[MOCAP_MAX_CHARACTERS];
     int64_t tick_taken[MOCAP_MAX_CHARACTERS];
     int batch_index[MOCAP_MAX_CHARACTERS];     /* tick entry of batch slot b */
-    float in_ori[MOCAP_MAX_CHARACTERS][54];
-    float in_acc[MOCAP_MAX_CHARACTERS][18];
+    int sensors;                /* N: the model's sensor count */
+    int with_mask;              /* contract 2: the model takes the mask */
+    float in_ori[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS * 9];
+    float in_acc[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS * 3];
+    float in_mask[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS];
     mocap_pose pose;
 
     mocap_atomic_u64 ticks, batched_calls, max_batch, solve_ns_total, solve_ns_max, run_ns_total;
@@ -94,24 +99,64 @@ struct mocap_solver {
 /* ---------------------------------------------------------------------------------------- */
 /* Inputs                                                                                      */
 
-int solver_frame_input(const mocap_frame *f, float orientation[54], float acceleration[18])
+int solver_frame_input(const mocap_frame *f, const int8_t *slot_of, int sensors, int with_mask,
+                       float *orientation, float *acceleration, float *mask)
 {
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
-        const mocap_sensor_frame *sf = &f->sensors[s];
-        double q[4];
-        for (int k = 0; k < 4; ++k) {
-            if (!isfinite(sf->bone_orientation[k])) return -1;
-            q[k] = sf->bone_orientation[k];
+    for (int k = 0; k < sensors; ++k) {
+        const int slot = slot_of[k];
+        const mocap_sensor_frame *sf = slot >= 0 && slot < (int)f->sensor_count ? &f->sensors[slot]
+                                                                               : NULL;
+        /* Contract 1 has no way to say "missing": its sensors are all required, so a slot
+         * always exists and a silent sensor is fed its held value, as the frame carries it. */
+        int present = sf != NULL;
+        if (with_mask && sf)
+            present = (sf->flags & MOCAP_SENSOR_CALIBRATED) &&
+                      (sf->state == MOCAP_SENSOR_FRESH || sf->state == MOCAP_SENSOR_HOLDING);
+        if (mask) mask[k] = present ? 1.0f : 0.0f;
+        if (!present) {
+            memset(orientation + k * 9, 0, 9 * sizeof(float));
+            memset(acceleration + k * 3, 0, 3 * sizeof(float));
+            continue;
         }
-        for (int k = 0; k < 3; ++k)
-            if (!isfinite(sf->bone_acceleration[k])) return -1;
+        double q[4];
+        for (int i = 0; i < 4; ++i) {
+            if (!isfinite(sf->bone_orientation[i])) return -1;
+            q[i] = sf->bone_orientation[i];
+        }
+        for (int i = 0; i < 3; ++i)
+            if (!isfinite(sf->bone_acceleration[i])) return -1;
         if (quat_normalize(q) != 0) return -1;
         double m[9];
         quat_to_mat3(m, q);
-        for (int k = 0; k < 9; ++k) orientation[s * 9 + k] = (float)m[k];
-        for (int k = 0; k < 3; ++k) acceleration[s * 3 + k] = sf->bone_acceleration[k];
+        for (int i = 0; i < 9; ++i) orientation[k * 9 + i] = (float)m[i];
+        for (int i = 0; i < 3; ++i) acceleration[k * 3 + i] = sf->bone_acceleration[i];
     }
     return 0;
+}
+
+/* Whether the model's required sensors are calibrated in f (require_calibration). */
+static int required_calibrated(const mocap_solver *s, const character *ch, const mocap_frame *f)
+{
+    for (int k = 0; k < s->sensors; ++k) {
+        if (!(s->info.sensor_required_mask & (1u << k))) continue;
+        const int slot = ch->slot_of[k];
+        if (slot < 0 || slot >= (int)f->sensor_count ||
+            !(f->sensors[slot].flags & MOCAP_SENSOR_CALIBRATED))
+            return 0;
+    }
+    return 1;
+}
+
+/* Whether every model sensor had a fresh sample for f. */
+static int model_sensors_fresh(const mocap_solver *s, const character *ch, const mocap_frame *f)
+{
+    for (int k = 0; k < s->sensors; ++k) {
+        const int slot = ch->slot_of[k];
+        if (slot < 0 || slot >= (int)f->sensor_count ||
+            f->sensors[slot].state != MOCAP_SENSOR_FRESH)
+            return 0;
+    }
+    return 1;
 }
 
 static int all_finite(const float *v, size_t n)
@@ -195,7 +240,7 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
     if (p[0] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_LEFT;
     if (p[1] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_RIGHT;
     if (corrected) flags |= MOCAP_POSE_CORRECTED;
-    if (!(f->flags & MOCAP_FRAME_COMPLETE)) flags |= MOCAP_POSE_INCOMPLETE;
+    if (!model_sensors_fresh(s, ch, f)) flags |= MOCAP_POSE_INCOMPLETE;
     pose->flags = flags;
     for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
         for (int k = 0; k < 4; ++k) pose->joint_rotations[j][k] = (float)q[j][k];
@@ -256,11 +301,12 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
         character *ch = s->chars[c];
         int64_t taken = taken_ns ? taken_ns[i] : t0;
         if (mocap_atomic_exchange_int(&ch->reset_requested, 0)) reset_character_state(s, ch);
-        if (s->config.require_calibration && !(frames[i]->flags & MOCAP_FRAME_CALIBRATED)) {
+        if (s->config.require_calibration && !required_calibrated(s, ch, frames[i])) {
             mocap_atomic_add_u64(&ch->frames_uncalibrated, 1);
             continue;
         }
-        if (solver_frame_input(frames[i], s->in_ori[nb], s->in_acc[nb]) != 0) {
+        if (solver_frame_input(frames[i], ch->slot_of, s->sensors, s->with_mask, s->in_ori[nb],
+                               s->in_acc[nb], s->with_mask ? s->in_mask[nb] : NULL) != 0) {
             mocap_atomic_add_u64(&ch->frames_nonfinite, 1);
             hold_pose(s, c, frames[i], taken);
             continue;
@@ -273,18 +319,23 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
     /* Gather: inputs and each character's [L][H] state into the stream's [B][..] / [L][B][H]. */
     ort_stream *st = s->streams[nb - 1];
     float *ori = ort_stream_orientation(st), *acc = ort_stream_acceleration(st);
+    float *mask = ort_stream_mask(st);
     float *sh = ort_stream_state_h(st), *sc = ort_stream_state_c(st);
+    const size_t N = (size_t)s->sensors;
     for (int b = 0; b < nb; ++b) {
         int i = s->batch_index[b];
         character *ch = s->chars[chars[i]];
-        memcpy(ori + (size_t)b * 54, s->in_ori[b], sizeof s->in_ori[b]);
-        memcpy(acc + (size_t)b * 18, s->in_acc[b], sizeof s->in_acc[b]);
+        memcpy(ori + (size_t)b * N * 9, s->in_ori[b], N * 9 * sizeof(float));
+        memcpy(acc + (size_t)b * N * 3, s->in_acc[b], N * 3 * sizeof(float));
+        if (mask) memcpy(mask + (size_t)b * N, s->in_mask[b], N * sizeof(float));
         for (int l = 0; l < L; ++l) {
             memcpy(sh + ((size_t)l * nb + b) * H, ch->state_h + (size_t)l * H, (size_t)H * sizeof(float));
             memcpy(sc + ((size_t)l * nb + b) * H, ch->state_c + (size_t)l * H, (size_t)H * sizeof(float));
         }
         mocap_atomic_add_u64(&ch->frames_solved, 1);
-        if (s->tap) s->tap(s->tap_user, chars[i], frames[i], s->in_ori[b], s->in_acc[b]);
+        if (s->tap)
+            s->tap(s->tap_user, chars[i], frames[i], s->in_ori[b], s->in_acc[b],
+                   s->with_mask ? s->in_mask[b] : NULL, s->sensors);
     }
     const int64_t r0 = mocap_monotonic_ns();
     mocap_status rs = ort_stream_run(st);
@@ -309,7 +360,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
     for (int b = 0; b < nb; ++b) {
         int i = s->batch_index[b];
         character *ch = s->chars[chars[i]];
-        int ok = all_finite(rot + (size_t)b * 216, 216) && all_finite(vel + (size_t)b * 3, 3) &&
+        int ok = all_finite(rot + (size_t)b * MOCAP_JOINT_COUNT * 9, MOCAP_JOINT_COUNT * 9) && all_finite(vel + (size_t)b * 3, 3) &&
                  all_finite(con + (size_t)b * 2, 2);
         for (int l = 0; ok && l < L; ++l)
             ok = all_finite(sh + ((size_t)l * nb + b) * H, (size_t)H) &&
@@ -323,7 +374,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
             memcpy(ch->state_h + (size_t)l * H, sh + ((size_t)l * nb + b) * H, (size_t)H * sizeof(float));
             memcpy(ch->state_c + (size_t)l * H, sc + ((size_t)l * nb + b) * H, (size_t)H * sizeof(float));
         }
-        build_pose(s, chars[i], frames[i], s->tick_taken[i], rot + (size_t)b * 216,
+        build_pose(s, chars[i], frames[i], s->tick_taken[i], rot + (size_t)b * MOCAP_JOINT_COUNT * 9,
                    vel + (size_t)b * 3, con + (size_t)b * 2);
     }
     const int64_t t1 = mocap_monotonic_ns();
@@ -357,7 +408,7 @@ static void pull_frame(mocap_solver *s, character *ch, int64_t now)
             ch->buf_taken_ns = now;
         }
         const mocap_frame *f = &ch->buf[ch->buf_pos++];
-        if (s->config.require_calibration && !(f->flags & MOCAP_FRAME_CALIBRATED)) {
+        if (s->config.require_calibration && !required_calibrated(s, ch, f)) {
             mocap_atomic_add_u64(&ch->frames_uncalibrated, 1);
             continue;
         }
@@ -488,6 +539,8 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
     }
     s->L = info->state_layers;
     s->H = info->state_size;
+    s->sensors = (int)info->sensor_count;
+    s->with_mask = info->contract_version >= 2;
     s->period_ns = (int64_t)(1e9 / info->frame_rate);
     s->drift.dt = 1.0 / info->frame_rate;
     s->smoothing.dt = 1.0 / info->frame_rate;
@@ -519,6 +572,17 @@ mocap_status mocap_solver_add_character(mocap_solver *s, mocap_session *session,
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "the session's output rate is %g Hz but the "
                           "model %s expects %g Hz frames: open the session with output_rate_hz = %g",
                           rate, s->info.model_name, want, want);
+    int8_t slot_of[MOCAP_MAX_SENSORS];
+    for (int k = 0; k < s->sensors; ++k) {
+        const int32_t seg = s->info.sensor_segments[k];
+        slot_of[k] = -1;
+        for (uint32_t i = 0; i < sc->sensor_count; ++i)
+            if (sc->sensor_segments[i] == seg) slot_of[k] = (int8_t)i;
+        if (slot_of[k] < 0 && (s->info.sensor_required_mask & (1u << k)))
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "the model %s needs a sensor on the %s, "
+                              "and the session has none: add it to the session's sensors",
+                              s->info.model_name, mocap_segment_name(seg));
+    }
     character *ch = (character *)calloc(1, sizeof *ch);
     size_t n = (size_t)s->L * (size_t)s->H;
     if (ch) {
@@ -536,6 +600,7 @@ mocap_status mocap_solver_add_character(mocap_solver *s, mocap_session *session,
         return mocap_fail(MOCAP_ERR_NO_MEMORY, "out of memory adding a character");
     }
     ch->session = session;
+    memcpy(ch->slot_of, slot_of, sizeof slot_of);
     ch->replay = sc->source_kind == MOCAP_SOURCE_REPLAY;
     ch->replay_fast = ch->replay && !sc->replay_realtime;
     s->chars[s->count] = ch;

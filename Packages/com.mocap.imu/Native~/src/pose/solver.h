@@ -25,10 +25,14 @@ extern "C" {
 ort_model *model_ort(mocap_model *model);
 const mocap_model_info *model_info(const mocap_model *model);
 
-/* A calibrated frame as model inputs: orientation [6][3][3] (bone -> model, row-major) from
- * bone_orientation and acceleration [6][3] from bone_acceleration. Returns 0, or -1 when any
- * value is NaN/Inf or a quaternion is zero (nothing of that frame may reach the model). */
-int solver_frame_input(const mocap_frame *frame, float orientation[54], float acceleration[18]);
+/* A calibrated frame as the inputs of a model with `sensors` sensors: model sensor k is the
+ * frame's sensor slot_of[k] (-1: none). orientation [N][3][3] (bone -> model, row-major) from
+ * bone_orientation, acceleration [N][3] from bone_acceleration. with_mask (contract 2): a sensor
+ * that is missing, uncalibrated or silent gets mask 0 and zero inputs, the others mask 1; mask
+ * may be NULL. Returns 0, or -1 when a value fed is NaN/Inf or a quaternion is zero (nothing of
+ * that frame may reach the model). */
+int solver_frame_input(const mocap_frame *frame, const int8_t *slot_of, int sensors, int with_mask,
+                       float *orientation, float *acceleration, float *mask);
 
 /* Create the per-batch-size streams (mocap_solver_start does it; tests that drive
  * solver_solve directly call it instead of starting the thread). */
@@ -44,7 +48,8 @@ mocap_status solver_solve(mocap_solver *solver, const int32_t *characters,
 /* Called on the solver thread for every frame fed to the model, with the exact inputs (for
  * golden tests and debugging). Set before mocap_solver_start. */
 typedef void (*solver_input_tap)(void *user, int32_t character, const mocap_frame *frame,
-                                 const float orientation[54], const float acceleration[18]);
+                                 const float *orientation, const float *acceleration,
+                                 const float *mask, int sensor_count);
 void solver_set_input_tap(mocap_solver *solver, solver_input_tap tap, void *user);
 
 #ifdef __cplusplus

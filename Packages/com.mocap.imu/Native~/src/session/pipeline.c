@@ -7,6 +7,7 @@
 #include "mocap_math.h"
 
 static void on_decoded_frame(void *user, const hipnuc_frame *frame);
+static void empty_report(const pipeline *p, mocap_calibration_report *r, int32_t step);
 
 mocap_status pipeline_validate_config(const mocap_session_config *c)
 {
@@ -31,15 +32,33 @@ mocap_status pipeline_validate_config(const mocap_session_config *c)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "imusol_layout %d is unknown", c->imusol_layout);
     if (c->world_frame != MOCAP_WORLD_NWU && c->world_frame != MOCAP_WORLD_ENU)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "world_frame %d is unknown", c->world_frame);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    if (c->sensor_count < 1 || c->sensor_count > MOCAP_MAX_SENSORS)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "sensor_count %u is outside 1..%d",
+                          (unsigned)c->sensor_count, MOCAP_MAX_SENSORS);
+    if (c->optional_mask >> c->sensor_count)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                          "optional_mask 0x%x names sensors beyond the %u configured",
+                          (unsigned)c->optional_mask, (unsigned)c->sensor_count);
+    for (uint32_t s = 0; s < c->sensor_count; ++s) {
+        int32_t seg = c->sensor_segments[s];
+        const char *name = mocap_segment_name(seg);
+        if (!name)
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                              "sensor %u: segment %d is not a known segment (0..%d)", (unsigned)s,
+                              seg, mocap_segment_count() - 1);
         int id = c->node_ids[s];
-        if (id < -1 || id > 255)
+        if (id < 0 || id > 255)
             return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "node id %d for %s is outside 0..255",
-                              id, mocap_segment_name(s));
-        for (int o = 0; o < s; ++o)
-            if (id >= 0 && c->node_ids[o] == id)
+                              id, name);
+        for (uint32_t o = 0; o < s; ++o) {
+            if (c->node_ids[o] == id)
                 return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "node id %d is mapped to both %s and %s",
-                                  id, mocap_segment_name(o), mocap_segment_name(s));
+                                  id, mocap_segment_name(c->sensor_segments[o]), name);
+            if (c->sensor_segments[o] == seg)
+                return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                                  "segment %s is configured for two sensors (%u and %u)", name,
+                                  (unsigned)o, (unsigned)s);
+        }
     }
     if (memchr(c->path, '\0', sizeof c->path) == NULL ||
         memchr(c->capture_path, '\0', sizeof c->capture_path) == NULL)
@@ -53,10 +72,10 @@ void pipeline_init(pipeline *p, const mocap_session_config *config, pipeline_fra
     memset(p, 0, sizeof *p);
     p->config = *config;
     for (int i = 0; i < 256; ++i) p->node_to_segment[i] = -1;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s)
-        if (config->node_ids[s] >= 0) p->node_to_segment[config->node_ids[s]] = s;
+    for (uint32_t s = 0; s < config->sensor_count; ++s)
+        p->node_to_segment[config->node_ids[s]] = (int)s;
     hipnuc_decoder_init(&p->decoder, config->imusol_layout);
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) {
+    for (int s = 0; s < MOCAP_MAX_SENSORS; ++s) {
         time_unwrapper_init(&p->unwrap[s]);
         clock_mapper_init(&p->clock[s]);
         p->untimed_t[s] = -INFINITY;
@@ -65,12 +84,12 @@ void pipeline_init(pipeline *p, const mocap_session_config *config, pipeline_fra
     }
     assembler_init(&p->assembler, config->output_rate_hz, config->hold_latency_s,
                    config->stale_after_s);
-    calib_init(&p->calib);
-    calib_identity(&p->calibration);
-    p->report.step = -1;
+    calib_init(&p->calib, config->sensor_count, config->sensor_segments, config->optional_mask);
+    calib_identity(&p->calibration, config->sensor_count, config->sensor_segments);
+    empty_report(p, &p->report, -1);
     p->report.state = MOCAP_CALIBRATION_IDLE;
     for (int i = 0; i <= MOCAP_CALIBRATION_HEADING_RESET; ++i) {
-        p->step_reports[i].step = i;
+        empty_report(p, &p->step_reports[i], i);
         p->step_reports[i].state = MOCAP_CALIBRATION_IDLE;
     }
     p->on_frame = on_frame;
@@ -78,11 +97,20 @@ void pipeline_init(pipeline *p, const mocap_session_config *config, pipeline_fra
     p->now_s = -INFINITY;
 }
 
+/* An empty report of the session's sensors, so a waiting step already lists them. */
+static void empty_report(const pipeline *p, mocap_calibration_report *r, int32_t step)
+{
+    memset(r, 0, sizeof *r);
+    r->step = step;
+    r->sensor_count = p->config.sensor_count;
+    for (uint32_t s = 0; s < p->config.sensor_count; ++s)
+        r->sensors[s].segment = p->config.sensor_segments[s];
+}
+
 static void begin_request(pipeline *p, const calibration_request *r)
 {
     calib_begin(&p->calib, r->step, r->start_s, r->duration_s);
-    memset(&p->report, 0, sizeof p->report);
-    p->report.step = r->step;
+    empty_report(p, &p->report, r->step);
     p->report.state = MOCAP_CALIBRATION_WAITING;
     p->report.seconds_remaining = r->duration_s;
     p->step_reports[r->step] = p->report;
@@ -117,7 +145,11 @@ static void emit_due_frames(pipeline *p)
                     p->step_reports[p->report.step] = p->report;
             }
         }
-        calib_apply(&p->calibration, p->config.world_frame, &p->raw, &p->out);
+        calib_apply(&p->calibration, p->config.world_frame, p->config.optional_mask, &p->raw, &p->out);
+        /* A sensor that never sent a sample still names the node it is configured for. */
+        for (uint32_t s = 0; s < p->config.sensor_count; ++s)
+            if (p->out.sensors[s].state == MOCAP_SENSOR_ABSENT)
+                p->out.sensors[s].node_id = (uint32_t)p->config.node_ids[s];
         p->out.sequence = p->raw.sequence;
         p->out.time_s = p->raw.t;
         p->out.newest_receive_ns = p->newest_receive_ns;
@@ -217,8 +249,7 @@ mocap_status pipeline_calibration_schedule(pipeline *p, int32_t step, double sta
         return mocap_fail(MOCAP_ERR_STATE, "%d calibration steps are already waiting",
                           PIPELINE_CALIBRATION_QUEUE);
     p->queue[p->queued++] = r;
-    memset(&p->step_reports[step], 0, sizeof p->step_reports[step]);
-    p->step_reports[step].step = step;
+    empty_report(p, &p->step_reports[step], step);
     p->step_reports[step].state = MOCAP_CALIBRATION_WAITING;
     p->step_reports[step].seconds_remaining = duration_s;
     return MOCAP_OK;

@@ -39,12 +39,12 @@ typedef struct pipeline_counters {
 
 typedef struct pipeline {
     mocap_session_config config;
-    int node_to_segment[256];          /* node id -> segment, -1 if unmapped */
+    int node_to_segment[256];          /* node id -> sensor index (config order), -1 if unmapped */
     hipnuc_decoder decoder;
-    time_unwrapper unwrap[MOCAP_SENSOR_COUNT];
-    clock_mapper clock[MOCAP_SENSOR_COUNT];
-    double untimed_t[MOCAP_SENSOR_COUNT]; /* last time given to a sample without a sensor time */
-    accel_kalman kalman[MOCAP_SENSOR_COUNT];
+    time_unwrapper unwrap[MOCAP_MAX_SENSORS];
+    clock_mapper clock[MOCAP_MAX_SENSORS];
+    double untimed_t[MOCAP_MAX_SENSORS]; /* last time given to a sample without a sensor time */
+    accel_kalman kalman[MOCAP_MAX_SENSORS];
     frame_assembler assembler;
     calib_accumulator calib;
     mocap_calibration calibration;

@@ -10,6 +10,7 @@
 #include "error.h"
 #include "mocap_imu.h"
 #include "pipeline.h"
+#include "segments.h"
 #include "session_internal.h"
 #include "platform.h"
 #include "spsc_ring.h"
@@ -88,7 +89,7 @@ mocap_status mocap_config_defaults(mocap_session_config *c)
     c->struct_size = sizeof *c;
     c->source_kind = MOCAP_SOURCE_SERIAL;
     c->baud = 460800;
-    for (int s = 0; s < MOCAP_SENSOR_COUNT; ++s) c->node_ids[s] = s;
+    c->sensor_count = segments_default_set(c->sensor_segments, c->node_ids);
     c->imusol_layout = MOCAP_IMUSOL_AUTO;
     c->world_frame = MOCAP_WORLD_NWU;
     c->output_rate_hz = 60.0f;
@@ -689,13 +690,41 @@ static mocap_status check_calibration(const mocap_calibration *cal)
     return MOCAP_OK;
 }
 
+/* cal's entries in the session's sensor order, matched by segment. */
+static mocap_status calibration_for_session(const mocap_session *s, const mocap_calibration *cal,
+                                            mocap_calibration *out)
+{
+    const mocap_session_config *c = &s->config;
+    calib_identity(out, c->sensor_count, c->sensor_segments);
+    int shared = 0;
+    for (uint32_t i = 0; i < c->sensor_count; ++i) {
+        int e = segments_index_of(cal->segments, cal->sensor_count, c->sensor_segments[i]);
+        if (e < 0) continue;
+        shared = 1;
+        memcpy(out->world_to_model[i], cal->world_to_model[e], sizeof out->world_to_model[i]);
+        memcpy(out->sensor_to_bone[i], cal->sensor_to_bone[e], sizeof out->sensor_to_bone[i]);
+        memcpy(out->acceleration_offset[i], cal->acceleration_offset[e],
+               sizeof out->acceleration_offset[i]);
+        if (cal->valid_mask & (1u << e)) out->valid_mask |= 1u << i;
+        if (cal->heading_mask & (1u << e)) out->heading_mask |= 1u << i;
+    }
+    if (!shared)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                          "calibration refused: none of its %u sensors is on a segment of this "
+                          "session", (unsigned)cal->sensor_count);
+    return MOCAP_OK;
+}
+
 mocap_status mocap_calibration_set(mocap_session *s, const mocap_calibration *cal)
 {
     if (!s || !cal) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "session or calibration is NULL");
     mocap_status st = check_calibration(cal);
     if (st != MOCAP_OK) return st;
+    mocap_calibration mapped;
+    st = calibration_for_session(s, cal, &mapped);
+    if (st != MOCAP_OK) return st;
     mocap_mutex_lock(s->lock);
-    s->calibration_to_set = *cal;
+    s->calibration_to_set = mapped;
     s->calibration_set_pending = 1;
     if (!s->started) publish_snapshots_locked(s); /* as in mocap_calibration_schedule */
     mocap_mutex_unlock(s->lock);
