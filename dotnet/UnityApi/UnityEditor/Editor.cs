@@ -4,6 +4,13 @@ using UnityEngine;
 
 namespace UnityEditor
 {
+    public static class EditorJsonUtility
+    {
+        public static string ToJson(object obj) => throw null;
+        public static string ToJson(object obj, bool prettyPrint) => throw null;
+        public static void FromJsonOverwrite(string json, object objectToOverwrite) => throw null;
+    }
+
     [AttributeUsage(AttributeTargets.Method, AllowMultiple = true)]
     public sealed partial class MenuItem : Attribute
     {

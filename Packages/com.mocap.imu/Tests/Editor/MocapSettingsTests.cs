@@ -3,7 +3,7 @@
 // holds the engine's default six; the list reaches the session config in order.
 
 using NUnit.Framework;
-using UnityEngine;
+using UnityEditor;
 
 namespace Mocap.Imu.Tests
 {
@@ -12,8 +12,8 @@ namespace Mocap.Imu.Tests
         [Test]
         public void ACharacterSavedWithSixNodeIdsLoadsAsASensorList()
         {
-            var source = JsonUtility.FromJson<MocapCharacterSource>(
-                "{\"name\":\"Old\",\"nodeIds\":[10,11,12,-1,14,15]}");
+            var source = new MocapCharacterSource();
+            EditorJsonUtility.FromJsonOverwrite("{\"name\":\"Old\",\"nodeIds\":[10,11,12,-1,14,15]}", source);
             var expected = new[]
             {
                 (MocapSegment.Pelvis, 10), (MocapSegment.LeftWrist, 11), (MocapSegment.RightWrist, 12),
@@ -27,7 +27,8 @@ namespace Mocap.Imu.Tests
                 Assert.IsFalse(source.sensors[i].optional);
             }
             // Saved again, the old field is gone and the list stays as it is.
-            var again = JsonUtility.FromJson<MocapCharacterSource>(JsonUtility.ToJson(source));
+            var again = new MocapCharacterSource();
+            EditorJsonUtility.FromJsonOverwrite(EditorJsonUtility.ToJson(source), again);
             Assert.AreEqual(expected.Length, again.sensors.Count);
             Assert.AreEqual(15, again.sensors[4].nodeId);
         }
