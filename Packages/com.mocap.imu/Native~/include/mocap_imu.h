@@ -465,7 +465,7 @@ typedef struct mocap_model_info {
     int32_t joint_parents[MOCAP_JOINT_COUNT];
     float rest_offsets[MOCAP_JOINT_COUNT][3];       /* metres, model frame; [0] = pelvis height */
     char joint_names[MOCAP_JOINT_COUNT][32];
-    char precision[8];                              /* "fp32" / "fp16" */
+    char precision[8];                              /* "fp32" / "fp16" / "int8" (weights) */
     char model_name[128];
 } mocap_model_info;
 

@@ -63,7 +63,7 @@ VARIANTS = ["valid", "wrong_input_name", "wrong_rank", "missing_metadata", "miss
             "wrong_version", "state_mismatch", "fixed_batch", "wrong_joint_name", "symbolic_dims",
             "wrong_output_shape", "rank_nine_output", "fails_on_impact", "v1_with_mask",
             "v2_chest", "v2_unknown_segment", "v2_required_length", "v2_missing_mask",
-            "v2_wrong_sensor_dim", "v2_duplicate_segment"]
+            "v2_wrong_sensor_dim", "v2_duplicate_segment", "int8_precision", "unknown_precision"]
 
 
 def metadata(**override):
@@ -281,6 +281,10 @@ def build(variant="valid"):
             override["contract_version"] = "3"
         if variant == "state_mismatch":
             override["state_layers"] = "3"
+        if variant == "int8_precision":
+            override["precision"] = "int8"
+        if variant == "unknown_precision":
+            override["precision"] = "bf16"
         if variant == "wrong_joint_name":
             names = list(JOINTS)
             names[18] = "left_forearm"

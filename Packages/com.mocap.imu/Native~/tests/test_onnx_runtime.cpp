@@ -154,6 +154,7 @@ TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
         {"v1_with_mask.onnx", "unexpected input 'imu_mask'"},
         {"v2_wrong_sensor_dim.onnx", "dimension 2 (N) is 6, the contract needs 7 (mocap.sensor_order)"},
         {"v2_duplicate_segment.onnx", "names 'head' twice"},
+        {"unknown_precision.onnx", "mocap.precision is 'bf16', expected fp32, fp16 or int8"},
     };
     for (const auto &c : cases) {
         Opened o;
@@ -170,6 +171,11 @@ TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
     EXPECT_EQ(ok.status, MOCAP_OK) << ok.message;
     open_model(dir + "/symbolic_dims.onnx", symbolic);
     EXPECT_EQ(symbolic.status, MOCAP_OK) << symbolic.message;
+    // Weights stored as int8 are a precision like fp16: the interface is the same.
+    Opened int8;
+    open_model(dir + "/int8_precision.onnx", int8);
+    ASSERT_EQ(int8.status, MOCAP_OK) << int8.message;
+    EXPECT_STREQ(ort_model_get_info(int8.model)->precision, "int8");
 }
 
 TEST(OnnxRuntime, ReadsMetadata)

@@ -507,9 +507,10 @@ static mocap_status read_metadata(ort_model *m)
     }
     info->state_layers = (int)layers;
     info->state_size = (int)size;
-    if (strcmp(values[8], "fp32") != 0 && strcmp(values[8], "fp16") != 0) {
-        r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.precision is '%s', expected fp32 or "
-                       "fp16", path, values[8]);
+    if (strcmp(values[8], "fp32") != 0 && strcmp(values[8], "fp16") != 0 &&
+        strcmp(values[8], "int8") != 0) {
+        r = mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.precision is '%s', expected fp32, fp16 "
+                       "or int8", path, values[8]);
         goto done;
     }
     snprintf(info->precision, sizeof info->precision, "%s", values[8]);
