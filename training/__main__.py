@@ -1,7 +1,7 @@
 """python3 -m training <command>: the pose model's tooling, from motion data to the shipped ONNX.
 
-Commands: prepare | pack | train | average | export | evaluate | sensor-gain | synth-capture |
-tip-model.
+Commands: prepare | pack | train | average | export | quantize | evaluate | sensor-gain |
+synth-capture | tip-model.
 
 Each subcommand imports its module lazily, so --help works while a module is missing."""
 from __future__ import annotations
@@ -16,6 +16,7 @@ COMMANDS = {
     "train": ("train", "train the pose model (checkpoints in training/data/checkpoints)"),
     "average": ("average", "average the weights of checkpoints of one network (model soup)"),
     "export": ("export", "export ONNX fp32 + fp16 per docs/model-contract.md"),
+    "quantize": ("quantize", "int8 weights for the fp32 model (mocap_pose_int8.onnx), checked against it"),
     "evaluate": ("evaluate", "metrics of PyTorch / ONNX models on held-out clips"),
     "sensor-gain": ("sensor_gain", "where a seventh sensor would cut the pose error most (an estimate)"),
     "synth-capture": ("synth_capture", "BVH clip -> raw HiPNUC capture via mocapctl synth"),

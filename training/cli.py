@@ -68,6 +68,7 @@ INPUTS = {
                  ("models", "files", "--models")],
     "sensor-gain": [("bvh", "bvh_or_pack", "--bvh"), ("checkpoint", "file", "--checkpoint")],
     "export": [("checkpoint", "file", "--checkpoint")],
+    "quantize": [("model", "file", "--model")],
     "average": [("checkpoints", "files", "checkpoint")],
     "synth-capture": [("bvh", "file", "BVH")],
 }
