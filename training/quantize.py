@@ -24,8 +24,8 @@ ONNX Runtime (training/ort.py: the engine's `mocapctl infer`) on procedural clip
 moved over OUT: a failed check (QuantizeCheckError, exit 1) leaves the previous file in place.
 
 --measure compares the int8 file (OUT) with the fp32 one (IN) on prepared CMU clips the way the
-engine runs them (one character, one frame per call, state carried) and times every model of
-the folder alternately on one thread; training/results/int8.md holds what it showed.
+engine runs them (one character, one frame per call, state carried), and times fp32, the fp16
+file beside it and int8 taking turns on one thread; training/results/int8.md holds what it showed.
 """
 from __future__ import annotations
 
