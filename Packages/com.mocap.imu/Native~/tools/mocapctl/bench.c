@@ -224,6 +224,7 @@ typedef struct bench_ctx {
     mocap_model *model;
     mocap_model_info info;
     double pipeline_fps;     /* poses/s of one character (0 until measured) */
+    uint32_t sensors;        /* in the generated capture */
 } bench_ctx;
 
 /* The benchmark's sensor set into a session config, with the model's optional sensors. */
@@ -580,6 +581,109 @@ static int tip_model_path(bench_ctx *b, char *out, size_t cap)
     return 0;
 }
 
+/* The shipped precisions of the pose model, found beside --model by their file names; --model
+ * itself is always measured (first) even when it is none of them. */
+#define PRECISION_MAX 4
+typedef struct timed_model {
+    char path[1024];
+    char label[16];
+    ort_model *model;
+    ort_stream *stream;
+    int64_t *t;
+    size_t n;
+} timed_model;
+
+static int find_precisions(const char *model_path, timed_model *out)
+{
+    static const char *const names[] = {"fp32", "fp16", "int8"};
+    int count = 0;
+    snprintf(out[count].path, sizeof out[count].path, "%s", model_path);
+    snprintf(out[count].label, sizeof out[count].label, "--model");
+    count++;
+    const char *slash = strrchr(model_path, '/');
+#if defined(_WIN32)
+    const char *back = strrchr(model_path, '\\');
+    if (!slash || (back && back > slash)) slash = back;
+#endif
+    const size_t dir_len = slash ? (size_t)(slash - model_path + 1) : 0;
+    for (size_t i = 0; i < sizeof names / sizeof names[0] && count < PRECISION_MAX; ++i) {
+        char path[1024];
+        snprintf(path, sizeof path, "%.*smocap_pose_%s.onnx", (int)dir_len, model_path, names[i]);
+        FILE *f = mocap_fopen(path, "rb");
+        if (!f) continue;
+        fclose(f);
+        if (strcmp(path, model_path) == 0) {
+            snprintf(out[0].label, sizeof out[0].label, "%s", names[i]);
+            continue;
+        }
+        snprintf(out[count].path, sizeof out[count].path, "%s", path);
+        snprintf(out[count].label, sizeof out[count].label, "%s", names[i]);
+        count++;
+    }
+    return count;
+}
+
+/* A still T-pose with small accelerations, every sensor present (the mask all ones). */
+static void fill_still_inputs(ort_model *m, ort_stream *stream)
+{
+    const int n = ort_model_get_info(m)->sensor_count;
+    float *ori = ort_stream_orientation(stream), *acc = ort_stream_acceleration(stream);
+    float *mask = ort_stream_mask(stream);
+    for (int s = 0; s < n; ++s) {
+        for (int k = 0; k < 9; ++k) ori[s * 9 + k] = (k % 4 == 0) ? 1.0f : 0.0f;
+        for (int k = 0; k < 3; ++k) acc[s * 3 + k] = 0.1f * (float)(s + k);
+        if (mask) mask[s] = 1.0f;
+    }
+}
+
+static void close_timed(timed_model *ms, int count)
+{
+    for (int i = 0; i < count; ++i) {
+        ort_stream_destroy(ms[i].stream);
+        ort_model_close(ms[i].model);
+        free(ms[i].t);
+    }
+}
+
+/* Our model(s) the way the solver runs them: one character, T = 1, state carried. The models
+ * take turns in short rounds, so a busy moment of the machine falls on all of them alike. */
+static mocap_status time_our_models(bench_ctx *b, timed_model *ms, int count, double seconds)
+{
+    ort_options oo;
+    ort_options_defaults(&oo);
+    oo.intra_op_threads = b->o->threads;
+    const size_t cap = 200000;
+    for (int i = 0; i < count; ++i) {
+        mocap_status st = ort_model_open(ms[i].path, &oo, &ms[i].model);
+        if (st == MOCAP_OK) st = ort_stream_create(ms[i].model, 1, 1, &ms[i].stream);
+        if (st != MOCAP_OK) return st;
+        ms[i].t = (int64_t *)malloc(cap * sizeof(int64_t));
+        if (!ms[i].t) return mocap_fail(MOCAP_ERR_NO_MEMORY, "bench: timing buffers");
+        fill_still_inputs(ms[i].model, ms[i].stream);
+        for (int w = 0; w < 20; ++w) ort_stream_run(ms[i].stream); /* warm-up */
+    }
+    const int rounds = 10;
+    for (int r = 0; r < rounds; ++r) {
+        for (int i = 0; i < count; ++i) {
+            const int64_t end = mocap_monotonic_ns() + (int64_t)(seconds / rounds * 1e9);
+            while (ms[i].n < cap && mocap_monotonic_ns() < end) {
+                int64_t a = mocap_monotonic_ns();
+                mocap_status st = ort_stream_run(ms[i].stream);
+                if (st != MOCAP_OK) return st;
+                ms[i].t[ms[i].n++] = mocap_monotonic_ns() - a;
+            }
+        }
+    }
+    return MOCAP_OK;
+}
+
+static double mean_ms(const int64_t *t, size_t n)
+{
+    double sum = 0;
+    for (size_t i = 0; i < n; ++i) sum += (double)t[i];
+    return n ? sum / (double)n * 1e-6 : 0.0;
+}
+
 static int bench_tip(bench_ctx *b)
 {
     char path[1024];
@@ -587,48 +691,21 @@ static int bench_tip(bench_ctx *b)
     const int threads = b->o->threads;
     const double seconds = b->o->tip_seconds > 0 ? b->o->tip_seconds : 3.0;
 
-    /* Ours: the engine's model, one character, T = 1 per frame (as the solver runs it). */
-    ort_options oo;
-    ort_options_defaults(&oo);
-    oo.intra_op_threads = threads;
-    ort_model *ours = NULL;
-    ort_stream *stream = NULL;
-    mocap_status st = ort_model_open(b->o->model_path, &oo, &ours);
-    if (st == MOCAP_OK) st = ort_stream_create(ours, 1, 1, &stream);
+    timed_model ours[PRECISION_MAX];
+    memset(ours, 0, sizeof ours);
+    const int n_models = find_precisions(b->o->model_path, ours);
+    mocap_status st = time_our_models(b, ours, n_models, seconds);
     if (st != MOCAP_OK) {
-        ort_model_close(ours);
-        return bench_fail(st, "opening our model");
-    }
-    float *ori = ort_stream_orientation(stream), *acc = ort_stream_acceleration(stream);
-    for (int s = 0; s < 6; ++s) {
-        for (int k = 0; k < 9; ++k) ori[s * 9 + k] = (k % 4 == 0) ? 1.0f : 0.0f;
-        for (int k = 0; k < 3; ++k) acc[s * 3 + k] = 0.1f * (float)(s + k);
-    }
-    size_t cap = 200000, n_ours = 0, n_tip = 0;
-    int64_t *t_ours = (int64_t *)malloc(cap * sizeof(int64_t));
-    int64_t *t_tip = (int64_t *)malloc(cap * sizeof(int64_t));
-    if (!t_ours || !t_tip) {
-        free(t_ours);
-        free(t_tip);
-        ort_stream_destroy(stream);
-        ort_model_close(ours);
-        return bench_fail(MOCAP_ERR_NO_MEMORY, "tip");
-    }
-    for (int i = 0; i < 20; ++i) ort_stream_run(stream); /* warm-up */
-    int64_t end = mocap_monotonic_ns() + (int64_t)(seconds * 1e9);
-    while (st == MOCAP_OK && n_ours < cap && mocap_monotonic_ns() < end) {
-        int64_t a = mocap_monotonic_ns();
-        st = ort_stream_run(stream);
-        t_ours[n_ours++] = mocap_monotonic_ns() - a;
-    }
-    ort_stream_destroy(stream);
-    ort_model_close(ours);
-    if (st != MOCAP_OK) {
-        free(t_ours);
-        free(t_tip);
+        close_timed(ours, n_models);
         return bench_fail(st, "running our model");
     }
 
+    size_t cap = 200000, n_tip = 0;
+    int64_t *t_tip = (int64_t *)malloc(cap * sizeof(int64_t));
+    if (!t_tip) {
+        close_timed(ours, n_models);
+        return bench_fail(MOCAP_ERR_NO_MEMORY, "tip");
+    }
     /* TIP's way: the whole 40-frame window re-run for every output frame, the newest frame's
      * input holding the previous output (its 131-value state feedback). */
     ort_generic *tip = NULL;
@@ -639,7 +716,7 @@ static int bench_tip(bench_ctx *b)
                         TIP_WINDOW, TIP_IN, TIP_WINDOW, TIP_OUT);
     if (st != MOCAP_OK) {
         ort_generic_close(tip);
-        free(t_ours);
+        close_timed(ours, n_models);
         free(t_tip);
         return bench_fail(st, "opening the TIP-shaped model");
     }
@@ -649,7 +726,7 @@ static int bench_tip(bench_ctx *b)
     mocap_rng_seed(&rng, 3);
     for (size_t k = 0; k < (size_t)TIP_WINDOW * TIP_IN; ++k) in[k] = (float)(mocap_rng_gaussian(&rng) * 0.5);
     for (int i = 0; i < 5 && st == MOCAP_OK; ++i) st = ort_generic_run(tip); /* warm-up */
-    end = mocap_monotonic_ns() + (int64_t)(seconds * 1e9);
+    int64_t end = mocap_monotonic_ns() + (int64_t)(seconds * 1e9);
     while (st == MOCAP_OK && n_tip < cap && mocap_monotonic_ns() < end) {
         int64_t a = mocap_monotonic_ns();
         memmove(in, in + TIP_IN, (size_t)(TIP_WINDOW - 1) * TIP_IN * sizeof(float));
@@ -664,27 +741,30 @@ static int bench_tip(bench_ctx *b)
     if (st != MOCAP_OK) {
         rc = bench_fail(st, "running the TIP-shaped model");
     } else {
-        double ours_p50 = percentile_ms(t_ours, n_ours, 0.5), tip_p50 = percentile_ms(t_tip, n_tip, 0.5);
-        double ours_mean = 0, tip_mean = 0;
-        for (size_t i = 0; i < n_ours; ++i) ours_mean += (double)t_ours[i];
-        for (size_t i = 0; i < n_tip; ++i) tip_mean += (double)t_tip[i];
-        ours_mean = ours_mean / (double)n_ours * 1e-6;
-        tip_mean = tip_mean / (double)n_tip * 1e-6;
+        const double tip_p50 = percentile_ms(t_tip, n_tip, 0.5), tip_mean = mean_ms(t_tip, n_tip);
         printf("tip: the seed's approach (TIP-shaped net, 221 -> 256, 4 x 16-head causal "
                "transformer, FF 1024, RNN 512 -> 131, random weights) re-run over a %d-frame "
                "window per output frame, same ONNX Runtime %s, %d intra-op thread(s):\n",
                TIP_WINDOW, ort_library_version(), threads);
         printf("  TIP-shaped: %.3f ms per frame (p50 %.3f; %zu frames) = %.0f frames/s per character\n",
                tip_mean, tip_p50, n_tip, 1e3 / tip_mean);
-        printf("  ours (model only, T = 1, recurrent state): %.3f ms per frame (p50 %.3f; %zu "
-               "frames) = %.0f frames/s\n", ours_mean, ours_p50, n_ours, 1e3 / ours_mean);
-        printf("  ratio per character: %.1fx (model vs model)", tip_mean / ours_mean);
+        printf("  ours, model only (one character, T = 1, recurrent state; the precisions take turns):\n");
+        printf("    %-8s %9s %9s %9s %10s %8s  %s\n", "weights", "mean ms", "p50 ms", "p99 ms",
+               "frames/s", "vs TIP", "file");
+        for (int i = 0; i < n_models; ++i) {
+            const double m = mean_ms(ours[i].t, ours[i].n);
+            printf("    %-8s %9.3f %9.3f %9.3f %10.0f %7.1fx  %s\n", ours[i].label, m,
+                   percentile_ms(ours[i].t, ours[i].n, 0.5), percentile_ms(ours[i].t, ours[i].n, 0.99),
+                   1e3 / m, tip_mean / m, ours[i].path);
+        }
+        const double ours_mean = mean_ms(ours[0].t, ours[0].n);
+        printf("  ratio per character (--model): %.1fx (model vs model)", tip_mean / ours_mean);
         if (b->pipeline_fps > 0)
             printf(", %.1fx (our whole pipeline vs the TIP network alone)",
                    b->pipeline_fps / (1e3 / tip_mean));
         printf("  [goal >= 10x]\n");
     }
-    free(t_ours);
+    close_timed(ours, n_models);
     free(t_tip);
     return rc;
 }
@@ -726,15 +806,20 @@ int mocapctl_bench_model(const char *which, const mocapctl_bench_options *o)
         goto done;
     }
     mocap_model_get_info(b->model, &b->info);
+    {
+        mocap_session_config defaults;
+        mocap_config_defaults(&defaults);
+        b->sensors = o->sensor_count ? o->sensor_count : defaults.sensor_count;
+    }
     printf("bench: model %s (%s, %s), ONNX Runtime %s, %ld CPU cores online, capture: %.0f s "
-           "of motion + 8 s prelude (6 sensors at 100 Hz, realistic noise)\n",
+           "of motion + 8 s prelude (%u sensors at 100 Hz, realistic noise)\n",
            o->model_path, b->info.model_name, b->info.precision, ort_library_version(),
 #if defined(_SC_NPROCESSORS_ONLN)
            sysconf(_SC_NPROCESSORS_ONLN),
 #else
            -1L,
 #endif
-           o->seconds);
+           o->seconds, (unsigned)b->sensors);
     st = make_capture(b);
     if (st == MOCAP_OK) st = calibrate_once(b);
     if (st != MOCAP_OK) {
