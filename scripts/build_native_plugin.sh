@@ -118,14 +118,14 @@ say "$DEST/libmocap_imu.so: $(stat -c %s "$DEST/libmocap_imu.so") bytes, $n_expo
 if [ $host_toolchain -eq 0 ]; then
   smoke="$work/smoke"
   as_root mkdir -p "$smoke"
-  as_root cp "$DEST/libmocap_imu.so" "$PKG/Runtime/Models/mocap_pose_fp32.onnx" \
+  as_root cp "$DEST/libmocap_imu.so" "$PKG/Runtime/Models/mocap_pose_int8.onnx" \
     "$ROOT/build/third_party/onnxruntime/lib/libonnxruntime.so" \
     "$PKG/Tests/Runtime/Fixtures/walk.cap" "$ROOT/scripts/plugin_smoke_load.c" "$smoke/"
   bullseye run gcc -std=gnu11 -O1 -Wall -Wextra -Werror \
     -I"$IN_ROOT/src/Packages/com.mocap.imu/Native~/include" -o "$IN_ROOT/smoke/plugin_smoke_load" \
     "$IN_ROOT/smoke/plugin_smoke_load.c" -ldl -lm || die "the smoke loader does not compile"
   bullseye run "$IN_ROOT/smoke/plugin_smoke_load" "$IN_ROOT/smoke/libmocap_imu.so" \
-    "$IN_ROOT/smoke/mocap_pose_fp32.onnx" "$IN_ROOT/smoke/libonnxruntime.so" "$IN_ROOT/smoke/walk.cap" \
+    "$IN_ROOT/smoke/mocap_pose_int8.onnx" "$IN_ROOT/smoke/libonnxruntime.so" "$IN_ROOT/smoke/walk.cap" \
     | sed 's/^/build_native_plugin: in the glibc 2.31 root: /' \
     || die "the plugin does not load or run on glibc 2.31"
 fi
@@ -133,7 +133,7 @@ fi
 # Smoke test of the stripped plugin as Unity would use it: load it, open the shipped model with
 # ONNX Runtime given by explicit path (the same libonnxruntime.so the registry package ships).
 ort_lib="$ROOT/build/third_party/onnxruntime/lib/libonnxruntime.so"
-/usr/bin/python3 - "$DEST/libmocap_imu.so" "$PKG/Runtime/Models/mocap_pose_fp32.onnx" "$ort_lib" <<'PY' \
+/usr/bin/python3 - "$DEST/libmocap_imu.so" "$PKG/Runtime/Models/mocap_pose_int8.onnx" "$ort_lib" <<'PY' \
   || die "the built plugin could not open the shipped model"
 import ctypes, sys
 lib = ctypes.CDLL(sys.argv[1])

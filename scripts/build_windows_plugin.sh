@@ -61,7 +61,7 @@ $MINGW-gcc-posix -std=c11 -O1 -Wall -Wextra -Werror -static -I"$NATIVE/include" 
 export WINEPREFIX="$BUILD/wine-prefix" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml="
 [ -f "$WINEPREFIX/system.reg" ] || { wineboot -i >"$BUILD.wineboot.log" 2>&1 && wineserver -w; } \
   || die "wineboot failed (log: $BUILD.wineboot.log)"
-wine "$smoke/windows_plugin_smoke.exe" "$DEST/mocap_imu.dll" "$PKG/Runtime/Models/mocap_pose_fp32.onnx" \
+wine "$smoke/windows_plugin_smoke.exe" "$DEST/mocap_imu.dll" "$PKG/Runtime/Models/mocap_pose_int8.onnx" \
   "$ROOT/build/third_party/onnxruntime/win-x64/onnxruntime.dll" | tr -d '\r' | sed 's/^/build_windows_plugin: smoke test under Wine: /' \
   || die "the built plugin does not load or open the shipped model under Wine"
 wineserver -k >/dev/null 2>&1 || true

@@ -16,6 +16,7 @@ REPO = Path(__file__).resolve().parents[2]
 MODELS = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
 SHIPPED_FP32 = MODELS / "mocap_pose_fp32.onnx"
 SHIPPED_FP16 = MODELS / "mocap_pose_fp16.onnx"
+SHIPPED_INT8 = MODELS / "mocap_pose_int8.onnx"
 
 # Today's figures (shipped fp32 model, procedural "mixed" motion through training.synth_capture
 # with realistic noise, random mountings and headings), over seven captures: seeds 1-7, 20 s and
@@ -86,7 +87,7 @@ def out_of_bounds(figures):
     return {k: v for k, v in measured.items() if v is None or v > BOUNDS[k]}
 
 
-@pytest.mark.parametrize("model", [SHIPPED_FP32, SHIPPED_FP16], ids=["fp32", "fp16"])
+@pytest.mark.parametrize("model", [SHIPPED_FP32, SHIPPED_FP16, SHIPPED_INT8], ids=["fp32", "fp16", "int8"])
 def test_shipped_model_stays_within_todays_accuracy(capture, model, tmp_path):
     figures, truth_rows = replay_accuracy(capture, model, tmp_path)
     # The poses cover the motion: a pipeline that loses frames (calibration late, drops) fails.

@@ -165,7 +165,7 @@ namespace Mocap.Imu
     {
         [Header("Pose model")]
         [Tooltip("The .onnx pose model. Relative paths resolve against the project; a player build ships it as StreamingAssets/com.mocap.imu/<file name>.")]
-        public string modelPath = "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx";
+        public string modelPath = PlayerPaths.DefaultModelPath;
 
         [Tooltip("Where the model runs: CPU (always available) or CUDA (needs a CUDA build of ONNX Runtime and a GPU; refused with a clear error otherwise).")]
         public ExecutionProvider executionProvider = ExecutionProvider.Cpu;

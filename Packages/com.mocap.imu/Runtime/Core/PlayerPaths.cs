@@ -184,7 +184,7 @@ namespace Mocap.Imu
     public static class PlayerPaths
     {
         /// <summary>The model the package ships and settings default to.</summary>
-        public const string DefaultModelPath = "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx";
+        public const string DefaultModelPath = "Packages/com.mocap.imu/Runtime/Models/mocap_pose_int8.onnx";
 
         /// <summary>The folder under StreamingAssets that holds the model in a player.</summary>
         public const string StreamingFolderName = "com.mocap.imu";
@@ -316,7 +316,7 @@ namespace Mocap.Imu
         public static string ModelTargetInProject(string configuredModelPath) =>
             "Assets/StreamingAssets/" + StreamingFolderName + "/" + ModelFileName(configuredModelPath);
 
-        /// <summary>The file name the model has in a player (that of the configured model; fp32 by default).</summary>
+        /// <summary>The file name the model has in a player (that of the configured model; the int8 one by default).</summary>
         public static string ModelFileName(string configuredModelPath)
         {
             string name = Path.GetFileName(NormaliseConfigured(configuredModelPath));

@@ -6,8 +6,8 @@
 
 #include "mocap_imu.h"
 
-/* The shipped fp32 model, relative to the repository root. */
-#define MOCAPCTL_SHIPPED_MODEL "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp32.onnx"
+/* The shipped default model (int8 weights), relative to the repository root. */
+#define MOCAPCTL_SHIPPED_MODEL "Packages/com.mocap.imu/Runtime/Models/mocap_pose_int8.onnx"
 
 /* The shipped model: $MOCAP_MODEL, else found above the executable, else above the current
  * directory, else where the build was configured from (MOCAP_SHIPPED_MODEL). 0 with its path in

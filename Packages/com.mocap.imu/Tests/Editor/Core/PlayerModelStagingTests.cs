@@ -16,7 +16,7 @@ namespace Mocap.Imu.Tests
             Directory.CreateDirectory(Path.Combine(project, "Assets"));
             modelsFolder = Path.Combine(project, "Packages", "com.mocap.imu", "Runtime", "Models");
             Directory.CreateDirectory(modelsFolder);
-            File.WriteAllBytes(Path.Combine(modelsFolder, "mocap_pose_fp32.onnx"), new byte[] { 1, 2, 3, 4 });
+            File.WriteAllBytes(Path.Combine(modelsFolder, "mocap_pose_int8.onnx"), new byte[] { 1, 2, 3, 4 });
             File.WriteAllBytes(Path.Combine(modelsFolder, "mocap_pose_fp16.onnx"), new byte[] { 5, 6 });
             return project;
         }
@@ -28,17 +28,17 @@ namespace Mocap.Imu.Tests
             var editor = RunningContext.Editor(HostOs.Linux, project);
             var plan = PlayerModelStaging.Plan(editor, new[] { null, "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp16.onnx" });
             Assert.That(plan.Select(c => c.ProjectRelativeTarget),
-                        Is.EqualTo(new[] { "Assets/StreamingAssets/com.mocap.imu/mocap_pose_fp32.onnx",
+                        Is.EqualTo(new[] { "Assets/StreamingAssets/com.mocap.imu/mocap_pose_int8.onnx",
                                            "Assets/StreamingAssets/com.mocap.imu/mocap_pose_fp16.onnx" }),
                         "an empty model path is the default model, which the player then needs");
 
             var created = PlayerModelStaging.Stage(project, plan);
             var target = Path.Combine(project, "Assets", "StreamingAssets", "com.mocap.imu", "mocap_pose_fp16.onnx");
             Assert.That(File.ReadAllBytes(target), Is.EqualTo(new byte[] { 5, 6 }));
-            Assert.That(File.ReadAllBytes(Path.Combine(Path.GetDirectoryName(target), "mocap_pose_fp32.onnx")), Is.EqualTo(new byte[] { 1, 2, 3, 4 }));
+            Assert.That(File.ReadAllBytes(Path.Combine(Path.GetDirectoryName(target), "mocap_pose_int8.onnx")), Is.EqualTo(new byte[] { 1, 2, 3, 4 }));
             Assert.That(created, Is.EqualTo(new[]
             {
-                "Assets/StreamingAssets/", "Assets/StreamingAssets/com.mocap.imu/", "Assets/StreamingAssets/com.mocap.imu/mocap_pose_fp32.onnx",
+                "Assets/StreamingAssets/", "Assets/StreamingAssets/com.mocap.imu/", "Assets/StreamingAssets/com.mocap.imu/mocap_pose_int8.onnx",
                 "Assets/StreamingAssets/com.mocap.imu/mocap_pose_fp16.onnx",
             }));
             // A player built now finds the model where the build put it.
@@ -64,9 +64,9 @@ namespace Mocap.Imu.Tests
             var own = Path.Combine(streaming, "config.json");
             File.WriteAllText(own, "{}");
             PlayerModelStaging.Stage(project, PlayerModelStaging.Plan(RunningContext.Editor(HostOs.Windows, project), null));
-            Assert.That(File.Exists(Path.Combine(streaming, "com.mocap.imu", "mocap_pose_fp32.onnx")), Is.True);
+            Assert.That(File.Exists(Path.Combine(streaming, "com.mocap.imu", "mocap_pose_int8.onnx")), Is.True);
             var removed = PlayerModelStaging.Unstage(project);
-            Assert.That(removed, Is.EqualTo(new[] { "Assets/StreamingAssets/com.mocap.imu/mocap_pose_fp32.onnx", "Assets/StreamingAssets/com.mocap.imu/" }));
+            Assert.That(removed, Is.EqualTo(new[] { "Assets/StreamingAssets/com.mocap.imu/mocap_pose_int8.onnx", "Assets/StreamingAssets/com.mocap.imu/" }));
             Assert.That(File.ReadAllText(own), Is.EqualTo("{}"));
             Assert.That(Directory.Exists(Path.Combine(streaming, "com.mocap.imu")), Is.False);
         }
@@ -77,8 +77,8 @@ namespace Mocap.Imu.Tests
             var project = NewProject(out var models);
             var folder = Path.Combine(project, "Assets", "StreamingAssets", "com.mocap.imu");
             Directory.CreateDirectory(folder);
-            var placed = Path.Combine(folder, "mocap_pose_fp32.onnx");
-            File.Copy(Path.Combine(models, "mocap_pose_fp32.onnx"), placed);
+            var placed = Path.Combine(folder, "mocap_pose_int8.onnx");
+            File.Copy(Path.Combine(models, "mocap_pose_int8.onnx"), placed);
             var plan = PlayerModelStaging.Plan(RunningContext.Editor(HostOs.MacOS, project), null);
             Assert.That(PlayerModelStaging.Stage(project, plan), Is.Empty);
             PlayerModelStaging.Unstage(project);
@@ -87,7 +87,7 @@ namespace Mocap.Imu.Tests
             File.WriteAllBytes(placed, new byte[] { 9, 9, 9, 9 });
             var e = Assert.Throws<MocapException>(() => PlayerModelStaging.Stage(project, plan));
             Assert.That(e.Status, Is.EqualTo(MocapStatus.InvalidArgument));
-            StringAssert.Contains("Assets/StreamingAssets/com.mocap.imu/mocap_pose_fp32.onnx", e.Message);
+            StringAssert.Contains("Assets/StreamingAssets/com.mocap.imu/mocap_pose_int8.onnx", e.Message);
             Assert.That(File.ReadAllBytes(placed), Is.EqualTo(new byte[] { 9, 9, 9, 9 }));
         }
 
@@ -97,10 +97,10 @@ namespace Mocap.Imu.Tests
             var project = NewProject(out _);
             var editor = RunningContext.Editor(HostOs.Linux, project);
             PlayerModelStaging.Stage(project, PlayerModelStaging.Plan(editor, new[] { "Packages/com.mocap.imu/Runtime/Models/mocap_pose_fp16.onnx" }));
-            // No post-build call (the build failed); the next build ships only the fp32 model.
+            // No post-build call (the build failed); the next build ships only the default model.
             PlayerModelStaging.Stage(project, PlayerModelStaging.Plan(editor, null));
             var folder = Path.Combine(project, "Assets", "StreamingAssets", "com.mocap.imu");
-            Assert.That(Directory.GetFiles(folder).Select(Path.GetFileName), Is.EqualTo(new[] { "mocap_pose_fp32.onnx" }));
+            Assert.That(Directory.GetFiles(folder).Select(Path.GetFileName), Is.EqualTo(new[] { "mocap_pose_int8.onnx" }));
         }
 
         [Test]
@@ -114,10 +114,10 @@ namespace Mocap.Imu.Tests
 
             var other = Path.Combine(project, "Assets", "Other");
             Directory.CreateDirectory(other);
-            File.WriteAllBytes(Path.Combine(other, "mocap_pose_fp32.onnx"), new byte[] { 7 });
-            e = Assert.Throws<MocapException>(() => PlayerModelStaging.Plan(editor, new[] { null, "Assets/Other/mocap_pose_fp32.onnx" }));
+            File.WriteAllBytes(Path.Combine(other, "mocap_pose_int8.onnx"), new byte[] { 7 });
+            e = Assert.Throws<MocapException>(() => PlayerModelStaging.Plan(editor, new[] { null, "Assets/Other/mocap_pose_int8.onnx" }));
             Assert.That(e.Status, Is.EqualTo(MocapStatus.InvalidArgument));
-            StringAssert.Contains("share the file name mocap_pose_fp32.onnx", e.Message);
+            StringAssert.Contains("share the file name mocap_pose_int8.onnx", e.Message);
             Assert.That(PlayerModelStaging.Plan(editor, new[] { "", PlayerPaths.DefaultModelPath }).Count, Is.EqualTo(1),
                         "the default given twice (empty and spelled out) is one copy");
         }

@@ -11,7 +11,7 @@ namespace Mocap.Imu.Tests
 {
     public sealed class PlayerPathsTests
     {
-        const string ModelName = "mocap_pose_fp32.onnx";
+        const string ModelName = "mocap_pose_int8.onnx";
 
         static string Touch(string root, params string[] parts)
         {
