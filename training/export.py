@@ -2,7 +2,10 @@
 
     python3 -m training export [--checkpoint PATH | --untrained] [--out DIR]
 
-writes DIR/mocap_pose_fp32.onnx and DIR/mocap_pose_fp16.onnx. Both have float32 inputs and
+writes DIR/mocap_pose_fp32.onnx and DIR/mocap_pose_fp16.onnx: model contract 1 for a network of
+the six default sensors without a mask (the shipped model), contract 2 for a masked network
+(ModelConfig.masked: its own sensor list, mocap.sensor_required from its optional sensors, and the
+imu_mask input). Both have float32 inputs and
 outputs; the fp16 file stores every floating-point initializer as float16 followed by a Cast to
 float32 (weight compression only: compute stays float32, which ONNX Runtime's CPU LSTM kernel
 requires). Dynamic B and T axes, opset 14, the contract's names and metadata. The files are
@@ -28,14 +31,17 @@ import torch
 from . import sensors as se
 from . import skeleton as sk
 from .errors import CommandError, UsageError
-from .model import ExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters, non_finite_tensors
+from .model import (ExportWrapper, MaskedExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters,
+                    non_finite_tensors)
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
 DEFAULT_CHECKPOINT = REPO / "training" / "data" / "checkpoints" / "best.pt"
 OPSET = 14
 CONTRACT_VERSION = "1"
+MASKED_CONTRACT_VERSION = "2"
 INPUT_NAMES = ["imu_orientation", "imu_acceleration", "state_in_h", "state_in_c"]
+MASKED_INPUT_NAMES = ["imu_orientation", "imu_acceleration", "imu_mask", "state_in_h", "state_in_c"]
 OUTPUT_NAMES = ["joint_rotations", "root_velocity", "foot_contact", "state_out_h", "state_out_c"]
 FP32_NAME = "mocap_pose_fp32.onnx"
 FP16_NAME = "mocap_pose_fp16.onnx"
@@ -55,12 +61,22 @@ def _fmt(x: float) -> str:
     return f"{float(x):.6g}"
 
 
+def contract_version(net) -> str:
+    """The model contract a network exports as: 2 when it takes the mask, else 1."""
+    return MASKED_CONTRACT_VERSION if net.config.masked else CONTRACT_VERSION
+
+
 def contract_metadata(net: PoseNet, precision: str, model_name: str) -> dict:
     require_contract_sensors(net, "the network")
-    return {
-        "mocap.contract_version": CONTRACT_VERSION,
+    meta = {
+        "mocap.contract_version": contract_version(net),
         "mocap.frame_rate": str(sk.MODEL_FPS),
         "mocap.sensor_order": ",".join(net.config.sensors),
+    }
+    if net.config.masked:
+        meta["mocap.sensor_required"] = ",".join(
+            "0" if n in net.config.optional else "1" for n in net.config.sensors)
+    return meta | {
         "mocap.joint_names": ",".join(sk.JOINT_NAMES),
         "mocap.joint_parents": ",".join(str(p) for p in sk.PARENTS),
         "mocap.rest_offsets": ",".join(_fmt(v) for v in np.asarray(sk.DEFAULT_OFFSETS).reshape(-1)),
@@ -82,7 +98,8 @@ def _set_metadata(model, meta: dict) -> None:
 def export_fp32(net: PoseNet, path, model_name: str) -> None:
     import onnx
     net = net.cpu().eval()
-    wrapper = ExportWrapper(net).eval()
+    masked = net.config.masked
+    wrapper = (MaskedExportWrapper(net) if masked else ExportWrapper(net)).eval()
     b, t, n = 1, 4, len(net.config.sensors)
     ori = torch.eye(3).expand(b, t, n, 3, 3).contiguous()
     acc = torch.zeros(b, t, n, 3)
@@ -91,18 +108,22 @@ def export_fp32(net: PoseNet, path, model_name: str) -> None:
            "state_in_h": {1: "B"}, "state_in_c": {1: "B"},
            "joint_rotations": {0: "B", 1: "T"}, "root_velocity": {0: "B", 1: "T"},
            "foot_contact": {0: "B", 1: "T"}, "state_out_h": {1: "B"}, "state_out_c": {1: "B"}}
+    inputs, input_names = (ori, acc, h, c), INPUT_NAMES
+    if masked:
+        inputs, input_names = (ori, acc, torch.ones(b, t, n), h, c), MASKED_INPUT_NAMES
+        dyn["imu_mask"] = {0: "B", 1: "T"}
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     import warnings
     with torch.no_grad(), warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        torch.onnx.export(wrapper, (ori, acc, h, c), str(path), input_names=INPUT_NAMES,
+        torch.onnx.export(wrapper, inputs, str(path), input_names=input_names,
                           output_names=OUTPUT_NAMES, dynamic_axes=dyn, opset_version=OPSET,
                           do_constant_folding=True)
     model = onnx.load(str(path))
     _fix_state_shapes(model, net)
     _set_metadata(model, contract_metadata(net, "fp32", model_name))
-    model.doc_string = "com.mocap.imu pose model, contract version " + CONTRACT_VERSION
+    model.doc_string = "com.mocap.imu pose model, contract version " + contract_version(net)
     onnx.checker.check_model(model)
     onnx.save(model, str(path))
 
@@ -111,7 +132,7 @@ def _fix_state_shapes(model, net: PoseNet) -> None:
     """Write the contract's shapes on every input and output (symbolic B and T, static rest;
     the exporter leaves some static dims symbolic, e.g. the 24 of a Concat)."""
     L, H, n = net.state_layers, net.state_size, len(net.config.sensors)
-    shapes = {"imu_orientation": ["B", "T", n, 3, 3], "imu_acceleration": ["B", "T", n, 3],
+    shapes = {"imu_orientation": ["B", "T", n, 3, 3], "imu_acceleration": ["B", "T", n, 3], "imu_mask": ["B", "T", n],
               "state_in_h": [L, "B", H], "state_in_c": [L, "B", H],
               "joint_rotations": ["B", "T", 24, 3, 3], "root_velocity": ["B", "T", 3],
               "foot_contact": ["B", "T", 2], "state_out_h": [L, "B", H], "state_out_c": [L, "B", H]}
@@ -184,29 +205,58 @@ def fixture_inputs(seconds: float = 3.0, seed: int = 0, kinds=("walk", "mixed"),
     return np.stack(oris).astype(np.float32), np.stack(accs).astype(np.float32)
 
 
-def torch_outputs(net: PoseNet, ori, acc) -> dict:
+def fixture_mask(net, ori, acc, seed: int = 0) -> tuple:
+    """A mask for fixture inputs of a masked network, and the inputs as the engine feeds them
+    with it (a missing sensor's inputs zero): the first character has every sensor; each other
+    one lacks its optional sensors for the whole clip and one more non-pelvis sensor for a
+    window in the middle. (None, ori, acc) for a network without the mask."""
+    if not net.config.masked:
+        return None, ori, acc
+    sensors = net.config.sensors
+    rng = np.random.default_rng(seed)
+    b, t, n = ori.shape[:3]
+    mask = np.ones((b, t, n), np.float32)
+    droppable = [k for k, name in enumerate(sensors) if name != "pelvis"]
+    for i in range(1, b):
+        for k, name in enumerate(sensors):
+            if name in net.config.optional:
+                mask[i, :, k] = 0
+        if droppable:
+            k = droppable[int(rng.integers(len(droppable)))]
+            mask[i, t // 4:(3 * t) // 4, k] = 0
+    return mask, ori * mask[..., None, None], acc * mask[..., None]
+
+
+def torch_outputs(net: PoseNet, ori, acc, mask=None) -> dict:
     with torch.no_grad():
-        r, v, c, (h, cc) = net(torch.from_numpy(ori), torch.from_numpy(acc))
+        r, v, c, (h, cc) = net(torch.from_numpy(ori), torch.from_numpy(acc), None,
+                               None if mask is None else torch.from_numpy(mask))
     return {"joint_rotations": r.numpy(), "root_velocity": v.numpy(), "foot_contact": c.numpy(),
             "state_out_h": h.numpy(), "state_out_c": cc.numpy()}
 
 
-def check_against_torch(net: PoseNet, paths: dict, ori=None, acc=None, stream_frames: int = 60) -> dict:
+def check_against_torch(net: PoseNet, paths: dict, ori=None, acc=None, stream_frames: int = 60,
+                        mask=None) -> dict:
     """Max abs difference per output, ONNX Runtime vs PyTorch, for each file; plus the
-    difference between streaming (T=1 per call) and one whole-clip call on the fp32 file."""
+    difference between streaming (T=1 per call) and one whole-clip call on the fp32 file. A
+    masked network runs with a mask (given, else fixture_mask's: sensors missing for whole clips
+    and for windows, their inputs zero)."""
     from . import ort
     if ori is None:
         ori, acc = fixture_inputs(sensors=net.config.sensors)
-    ref = torch_outputs(net, ori, acc)
+    if mask is None:
+        mask, ori, acc = fixture_mask(net, ori, acc)
+    ref = torch_outputs(net, ori, acc, mask)
     report = {}
     for tag, p in paths.items():
-        out = ort.run_onnx(p, ori, acc)
+        out = ort.run_onnx(p, ori, acc, mask=mask)
         report[tag] = {k: float(np.max(np.abs(out[k] - ref[k]))) for k in OUTPUT_NAMES}
     p32 = paths.get("fp32")
     if p32 is not None:
         n = min(stream_frames, ori.shape[1])
-        whole = ort.run_onnx(p32, ori[:, :n], acc[:, :n])
-        streamed = ort.run_onnx(p32, ori[:, :n], acc[:, :n], stream=True)
+        part = None if mask is None else mask[:, :n]
+        whole = ort.run_onnx(p32, ori[:, :n], acc[:, :n], mask=part)
+        streamed = ort.run_onnx(p32, ori[:, :n], acc[:, :n], stream=True, mask=part)
         report["stream_vs_whole_fp32"] = {k: float(np.max(np.abs(whole[k] - streamed[k])))
                                           for k in OUTPUT_NAMES}
     return report
@@ -234,13 +284,14 @@ def require_exportable(net, what: str) -> None:
 
 
 def require_contract_sensors(net, what: str) -> None:
-    """A UsageError for a sensor list other than contract version 1's (the default set in table
-    order): the exporter writes contract 1 only, without the imu_mask input of contract 2."""
-    if tuple(net.config.sensors) != se.DEFAULT_SENSORS:
-        raise UsageError(f"{what} reads the sensors {','.join(net.config.sensors)}; this exporter writes "
-                         f"model contract {CONTRACT_VERSION}, whose sensors are "
-                         f"{','.join(se.DEFAULT_SENSORS)} (contract 2, with imu_mask, is not generated "
-                         f"yet); nothing written")
+    """A UsageError for a network without the mask whose sensor list is not contract version 1's
+    (the default set in table order): only a masked network exports as contract 2, with its own
+    sensor list."""
+    if not net.config.masked and tuple(net.config.sensors) != se.DEFAULT_SENSORS:
+        raise UsageError(f"{what} reads the sensors {','.join(net.config.sensors)} without a mask input; "
+                         f"model contract {CONTRACT_VERSION} has the sensors {','.join(se.DEFAULT_SENSORS)}, "
+                         f"and contract {MASKED_CONTRACT_VERSION} (any sensor list) needs a masked network "
+                         f"(train --masked, --optional or --sensor-dropout); nothing written")
 
 
 def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True) -> dict:

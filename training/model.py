@@ -22,6 +22,13 @@ Every normalisation happens inside the module (and so inside the exported ONNX g
   the measured heading-free pelvis orientation and rotated back by Ry; joints 1..23 are residuals
   on the identity (rest pose); root velocity is predicted in the heading frame and rotated back.
 
+A masked network (ModelConfig.masked, model contract 2) also takes a mask (B,T,N): 1 where a sensor
+is present, 0 where it is missing, with that sensor's inputs zero (as the engine feeds them). A
+zero matrix is no rotation, so a missing sensor's orientation is read as the identity and its
+acceleration as zero, every feature block of a missing sensor (and every pelvis-relative block
+while the pelvis is missing) is zeroed, and the mask itself is appended to the features, so the
+network knows what it lacks; an anchored bone of a missing sensor falls back to the rest pose.
+
 Rotations are predicted as 6D (first two matrix columns) and orthonormalised by Gram-Schmidt.
 Only export-friendly ops are used (matmul, slicing, elementwise, LSTM, no atan2).
 """
@@ -42,10 +49,24 @@ OUTPUT_SIZE = NUM_JOINTS * 6 + 3 + 2           # 149
 PELVIS = "pelvis"
 
 
-def feature_size(num_sensors: int) -> int:
+def feature_size(num_sensors: int, masked: bool = False) -> int:
     """Per-frame features of N sensors: N orientations and accelerations in the heading frame,
-    N - 1 of each relative to the pelvis."""
-    return num_sensors * (9 + 3) + (num_sensors - 1) * (9 + 3)
+    N - 1 of each relative to the pelvis; a masked network adds the N mask values."""
+    return num_sensors * (9 + 3) + (num_sensors - 1) * (9 + 3) + (num_sensors if masked else 0)
+
+
+def feature_labels(sensors, masked: bool = False) -> list:
+    """What each per-frame feature reads, in the network's feature order: (block, segment,
+    component) with block "ori" / "acc" (heading frame), "rel_ori" / "rel_acc" (relative to the
+    pelvis) or "mask". Two networks' first layers line up through these (with_sensors)."""
+    others = [n for n in sensors if n != PELVIS]
+    labels = [("ori", n, k) for n in sensors for k in range(9)]
+    labels += [("acc", n, k) for n in sensors for k in range(3)]
+    labels += [("rel_ori", n, k) for n in others for k in range(9)]
+    labels += [("rel_acc", n, k) for n in others for k in range(3)]
+    if masked:
+        labels += [("mask", n, 0) for n in sensors]
+    return labels
 
 
 def _ancestors(joints):
@@ -81,6 +102,11 @@ class ModelConfig:
     # The input sensors, segment names in input order (sensors.py). Checkpoints written before
     # it existed have the default six.
     sensors: tuple = se.DEFAULT_SENSORS
+    # Which of `sensors` the network can do without (model contract 2's mocap.sensor_required
+    # 0), and whether it takes the mask input that says, frame by frame, which sensors are
+    # present. False is the network of contract 1 (no mask: every sensor always present).
+    optional: tuple = ()
+    masked: bool = False
     # The recurrent core between the frame MLP and the heads: "lstm" (the shipped network: an
     # LSTM of `layers` x `hidden`) or "transformer", the class of the seed system's TIP for the
     # architecture comparison (`train --size tip`): `blocks` causal self-attention blocks of
@@ -105,6 +131,10 @@ class ModelConfig:
         if d["wrist_anchor"] not in se.WRIST_SENSOR_PLACES:
             raise ValueError(f"wrist_anchor {d['wrist_anchor']!r}: expected one of {list(se.WRIST_SENSOR_PLACES)}")
         d["sensors"] = check_sensors(d.get("sensors", se.DEFAULT_SENSORS))
+        d["masked"] = d.get("masked", False)
+        if not isinstance(d["masked"], bool):
+            raise ValueError(f"masked {d['masked']!r}: expected true or false")
+        d["optional"] = check_optional(d["sensors"], d.get("optional", ()), d["masked"])
         # A damaged or hand-edited config would otherwise fail deep inside torch (e.g. nn.LSTM
         # with hidden -5), far from the file that holds it.
         if d.get("core", "lstm") not in CORES:
@@ -131,6 +161,27 @@ def check_sensors(names) -> tuple:
     if PELVIS not in names:
         raise ValueError(f"sensors {', '.join(names)}: the network needs a {PELVIS} sensor (its heading frame)")
     return names
+
+
+def check_optional(sensors, optional, masked: bool) -> tuple:
+    """The optional sensors (segment names, or one comma-separated string) checked against the
+    network's sensor list and returned in its order; ValueError for a name not in the list, an
+    optional pelvis (every feature is expressed in its heading frame and relative to it), or
+    optional sensors on a network without the mask input."""
+    if isinstance(optional, str):
+        optional = [n.strip() for n in optional.split(",") if n.strip()]
+    optional = tuple(optional or ())
+    for n in optional:
+        if n not in sensors:
+            raise ValueError(f"optional sensor {n!r} is not one of the network's sensors "
+                             f"({', '.join(sensors)})")
+    if PELVIS in optional:
+        raise ValueError(f"the {PELVIS} cannot be optional: the network expresses every other sensor "
+                         f"in the pelvis heading frame and relative to the pelvis")
+    if optional and not masked:
+        raise ValueError(f"optional sensors ({', '.join(optional)}) need a masked network (masked: the "
+                         f"mask input tells it which sensors are present)")
+    return tuple(n for n in sensors if n in optional)
 
 
 def check_attention_dims(embed: int, heads: int, window: int) -> None:
@@ -302,10 +353,11 @@ class PoseNet(nn.Module):
         self.config = replace(config) if config else ModelConfig()   # own copy: set_dropout edits it
         c = self.config
         c.sensors = check_sensors(c.sensors)
+        c.optional = check_optional(c.sensors, c.optional, c.masked)
         self.pelvis = c.sensors.index(PELVIS)
         self.others = [i for i in range(len(c.sensors)) if i != self.pelvis]
         self.embed = nn.Sequential(
-            nn.Linear(feature_size(len(c.sensors)), c.embed), nn.ReLU(),
+            nn.Linear(feature_size(len(c.sensors), c.masked), c.embed), nn.ReLU(),
             nn.Linear(c.embed, c.embed), nn.ReLU())
         if c.core == "transformer":
             self.core = WindowedTransformerCore(c)
@@ -321,6 +373,16 @@ class PoseNet(nn.Module):
             self.head[-1].bias.zero_()
         ident = torch.tensor([1.0, 0.0, 0.0, 0.0, 1.0, 0.0])
         self.register_buffer("identity6d", ident, persistent=False)
+        self.register_buffer("identity3", torch.eye(3), persistent=False)
+
+    @property
+    def required_flags(self) -> list:
+        """1 for each required sensor, 0 for each optional one (input order)."""
+        return [0 if n in self.config.optional else 1 for n in self.config.sensors]
+
+    def full_mask(self, ori: torch.Tensor) -> torch.Tensor:
+        """Every sensor present: ones (B,T,N) for inputs (B,T,N,3,3)."""
+        return torch.ones(ori.shape[:3], dtype=ori.dtype, device=ori.device)
 
     def set_dropout(self, p: float) -> None:
         """Dropout has no weights, so a warm start can change it."""
@@ -376,9 +438,11 @@ class PoseNet(nn.Module):
         z = torch.zeros(shape, device=device)
         return z, z.clone()
 
-    def features(self, ori: torch.Tensor, acc: torch.Tensor) -> tuple:
-        """ori (B,T,N,3,3), acc (B,T,N,3) -> (features (B,T,24N-12), Ry (B,T,3,3), the N
-        orientations in the heading frame (B,T,N,3,3))."""
+    def features(self, ori: torch.Tensor, acc: torch.Tensor, mask: torch.Tensor | None = None) -> tuple:
+        """ori (B,T,N,3,3), acc (B,T,N,3) (and for a masked network mask (B,T,N)) -> (features
+        (B,T,feature_size), Ry (B,T,3,3), the N orientations in the heading frame (B,T,N,3,3))."""
+        if self.config.masked:
+            return self._masked_features(ori, acc, mask)
         p = self.pelvis
         r0 = ori[:, :, p]
         ry = heading_rotation(r0)
@@ -392,7 +456,30 @@ class PoseNet(nn.Module):
                           rrel.flatten(2), arel.flatten(2) / ACC_SCALE], dim=-1)
         return feat, ry, rg
 
-    def _anchor_sensor_bones(self, rot, rot6, rg):
+    def _masked_features(self, ori, acc, mask) -> tuple:
+        """features() of a masked network: a missing sensor reads as identity orientation and
+        zero acceleration (so the heading and the relative rotations stay rotations), its feature
+        blocks are zeroed (so its placeholder says nothing), and the mask is appended."""
+        p = self.pelvis
+        m4 = mask.unsqueeze(-1)                                    # (B,T,N,1)
+        m5 = m4.unsqueeze(-1)                                      # (B,T,N,1,1)
+        ori = ori * m5 + self.identity3 * (1.0 - m5)
+        acc = acc * m4
+        r0 = ori[:, :, p]
+        ry = heading_rotation(r0)
+        ryt = ry.transpose(-1, -2).unsqueeze(2)
+        rg = ryt @ ori
+        ag = (ryt @ acc.unsqueeze(-1)).squeeze(-1)
+        r0t = r0.transpose(-1, -2).unsqueeze(2)
+        rrel = r0t @ _index(ori, 2, self.others)
+        arel = (r0t @ (_index(acc, 2, self.others) - acc[:, :, p:p + 1]).unsqueeze(-1)).squeeze(-1)
+        m_rel = _index(mask, 2, self.others) * mask[:, :, p:p + 1]   # both ends of the relation
+        feat = torch.cat([(rg * m5).flatten(2), (ag * m4).flatten(2) / ACC_SCALE,
+                          (rrel * m_rel[..., None, None]).flatten(2),
+                          (arel * m_rel[..., None]).flatten(2) / ACC_SCALE, mask], dim=-1)
+        return feat, ry, rg
+
+    def _anchor_sensor_bones(self, rot, rot6, rg, mask=None):
         """Re-predicts the local rotation of each non-pelvis sensor bone as a residual on the one
         its sensor measures: parent_global^T * sensor_orientation, the parent's global rotation
         from forward kinematics of the predicted ancestors (heading frame). A network with a zero
@@ -409,13 +496,34 @@ class PoseNet(nn.Module):
             if j == 0:
                 continue
             measured = glob[PARENTS[j]].transpose(-1, -2) @ rg[:, :, s]
-            cols[j] = rot6d_to_matrix(rot6[:, :, j] + matrix_to_rot6d(measured))
+            if mask is None:
+                cols[j] = rot6d_to_matrix(rot6[:, :, j] + matrix_to_rot6d(measured))
+            else:   # a missing sensor measures nothing: its bone is a residual on the rest pose
+                present = mask[:, :, s:s + 1]
+                base = matrix_to_rot6d(measured) * present + self.identity6d * (1.0 - present)
+                cols[j] = rot6d_to_matrix(rot6[:, :, j] + base)
         return torch.stack(cols, dim=2)
 
-    def forward_raw(self, ori, acc, state=None):
-        """Returns (joint_rotations, root_velocity, contact_logits, (h, c))."""
+    def _checked_mask(self, ori, mask):
+        """The mask a masked network runs with (all present when None); a ValueError for a mask
+        given to a network without the mask input, or of the wrong shape."""
+        if not self.config.masked:
+            if mask is not None:
+                raise ValueError("this network has no mask input (ModelConfig.masked is false): every "
+                                 "sensor must be present")
+            return None
+        if mask is None:
+            return self.full_mask(ori)
+        if tuple(mask.shape) != tuple(ori.shape[:3]):
+            raise ValueError(f"imu_mask must be (B,T,N) = {tuple(ori.shape[:3])}, got {tuple(mask.shape)}")
+        return mask.to(ori.dtype)
+
+    def forward_raw(self, ori, acc, state=None, mask=None):
+        """Returns (joint_rotations, root_velocity, contact_logits, (h, c)). mask (B,T,N): a
+        masked network's present sensors (None: all)."""
         b, t = ori.shape[0], ori.shape[1]
-        feat, ry, rg = self.features(ori, acc)
+        mask = self._checked_mask(ori, mask)
+        feat, ry, rg = self.features(ori, acc, mask)
         p = self.config.dropout if self.training else 0.0
         x = self.embed(feat)
         if p > 0:
@@ -434,7 +542,7 @@ class PoseNet(nn.Module):
         base = torch.cat([base0, self.identity6d.expand(b, t, NUM_JOINTS - 1, 6)], dim=2)
         rot = rot6d_to_matrix(rot6 + base)
         if self.config.anchored:
-            rot = self._anchor_sensor_bones(rot, rot6, rg)
+            rot = self._anchor_sensor_bones(rot, rot6, rg, mask)
         root_global = ry @ rot[:, :, 0]
         rot = torch.cat([root_global.unsqueeze(2), rot[:, :, 1:]], dim=2)
         vel_h = out[..., NUM_JOINTS * 6:NUM_JOINTS * 6 + 3]
@@ -442,9 +550,10 @@ class PoseNet(nn.Module):
         logits = out[..., NUM_JOINTS * 6 + 3:NUM_JOINTS * 6 + 5]
         return rot, vel, logits, (h, c)
 
-    def forward(self, imu_orientation, imu_acceleration, state=None):
-        """Contract forward: (joint_rotations, root_velocity, foot_contact (0..1), (h, c))."""
-        rot, vel, logits, st = self.forward_raw(imu_orientation, imu_acceleration, state)
+    def forward(self, imu_orientation, imu_acceleration, state=None, imu_mask=None):
+        """Contract forward: (joint_rotations, root_velocity, foot_contact (0..1), (h, c));
+        imu_mask only for a masked network (None: every sensor present)."""
+        rot, vel, logits, st = self.forward_raw(imu_orientation, imu_acceleration, state, imu_mask)
         return rot, vel, torch.sigmoid(logits), st
 
 
@@ -488,7 +597,7 @@ class MirrorEnsemble(nn.Module):
         c = self.net.config
         return (c.embed, c.hidden) if c.core == "transformer" else (c.hidden, c.hidden)
 
-    def forward(self, imu_orientation, imu_acceleration, state=None):
+    def forward(self, imu_orientation, imu_acceleration, state=None, imu_mask=None):
         m = self.reflect
         b = imu_orientation.shape[0]
         mirror = self.mirror_sensors
@@ -498,7 +607,10 @@ class MirrorEnsemble(nn.Module):
             state = self.zero_state(b, imu_orientation.device)
         inner = tuple(torch.cat([s[..., :half], s[..., half:]], dim=1)
                       for s, half in zip(state, self._branch_widths()))
-        rot, vel, contact, (h, c) = self.net(ori, acc, inner)
+        mask = self.net._checked_mask(imu_orientation, imu_mask)
+        if mask is not None:   # the mirror image's left sensor is the right one: its mask too
+            mask = torch.cat([mask, mask[:, :, mirror]], dim=0)
+        rot, vel, contact, (h, c) = self.net(ori, acc, inner, mask)
         back = m @ rot[b:][:, :, MIRROR_JOINTS] @ m
         rot = rot6d_to_matrix(matrix_to_rot6d(0.5 * (rot[:b] + back)))
         vel = 0.5 * (vel[:b] + vel[b:] @ m)
@@ -519,6 +631,49 @@ class ExportWrapper(nn.Module):
         rot, vel, contact, (h, c) = self.net(imu_orientation, imu_acceleration,
                                              (state_in_h, state_in_c))
         return rot, vel, contact, h, c
+
+
+class MaskedExportWrapper(nn.Module):
+    """Flat signature of model contract 2: the mask is the third input."""
+
+    def __init__(self, net: PoseNet):
+        super().__init__()
+        self.net = net
+
+    def forward(self, imu_orientation, imu_acceleration, imu_mask, state_in_h, state_in_c):
+        rot, vel, contact, (h, c) = self.net(imu_orientation, imu_acceleration,
+                                             (state_in_h, state_in_c), imu_mask)
+        return rot, vel, contact, h, c
+
+
+def with_sensors(net: PoseNet, sensors, optional=(), masked: bool = True) -> PoseNet:
+    """A new PoseNet reading `sensors` (with these optional ones, masked or not) that starts from
+    net's weights, for a warm start on another sensor set: every weight is copied, and the first
+    layer's input columns are matched by what they read (feature_labels), so the columns of a
+    new sensor and of the mask start at zero and those of a sensor left out are dropped. A
+    contract-1 network widened this way gives its own answer while the new sensors are missing
+    (mask 0) and the others present. ValueError for a list the network cannot take."""
+    config = replace(net.config, sensors=check_sensors(sensors), optional=tuple(optional or ()),
+                     masked=bool(masked))
+    out = PoseNet(config).to(next(net.parameters()).device)
+    src = net.state_dict()
+    dst = out.state_dict()
+    old_cols = {label: i for i, label in enumerate(feature_labels(net.config.sensors, net.config.masked))}
+    key = "embed.0.weight"
+    first = torch.zeros_like(dst[key])
+    for i, label in enumerate(feature_labels(config.sensors, config.masked)):
+        if label in old_cols:
+            first[:, i] = src[key][:, old_cols[label]]
+    for k, v in src.items():
+        if k == key:
+            continue
+        if k not in dst or dst[k].shape != v.shape:
+            raise ValueError(f"weight {k} does not carry over to the network of sensors "
+                             f"{','.join(config.sensors)}")
+        dst[k] = v.clone()
+    dst[key] = first
+    out.load_state_dict(dst)
+    return out.train(net.training)
 
 
 def count_parameters(net: nn.Module) -> int:

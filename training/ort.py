@@ -7,7 +7,8 @@ tests off) unless the environment variable MOCAP_MOCAPCTL names one. Arrays trav
 "tensor bundle" files (format in Packages/com.mocap.imu/Native~/tools/mocapctl/cmd_infer.c and
 training/README.md).
 
-    run_onnx(model_path, imu_orientation (B,T,N,3,3), imu_acceleration (B,T,N,3), state=None)
+    run_onnx(model_path, imu_orientation (B,T,N,3,3), imu_acceleration (B,T,N,3), state=None,
+             mask=None (B,T,N), contract 2 only)
         -> dict(joint_rotations (B,T,24,3,3), root_velocity (B,T,3), foot_contact (B,T,2),
                 state_out_h (L,B,H), state_out_c (L,B,H))
     onnx_runtime_available() -> bool
@@ -171,13 +172,14 @@ def _state_arrays(state):
 
 
 def run_onnx(model_path, imu_orientation, imu_acceleration, state=None, *, frames_per_call=None,
-             stream=False, threads=None, timing=False):
+             stream=False, threads=None, timing=False, mask=None):
     """Run an ONNX pose model on the real ONNX Runtime (through `mocapctl infer`).
 
     imu_orientation (B,T,N,3,3), imu_acceleration (B,T,N,3) in the model's sensor order (N = 6
     for contract 1; mocapctl infer checks N against the model); state: None (zeros), a tuple
     (h, c) or a dict with state_in_h/state_in_c (or a previous result's state_out_h/_c), each
-    (L,B,H). The whole clip runs in one call unless frames_per_call (or stream=True: 1 frame per
+    (L,B,H); mask: imu_mask (B,T,N) of a contract-2 model (None: every sensor present; mocapctl
+    refuses one for a model without the mask input). The whole clip runs in one call unless frames_per_call (or stream=True: 1 frame per
     call, as the engine runs). Returns a dict of float32 arrays: joint_rotations (B,T,24,3,3),
     root_velocity (B,T,3), foot_contact (B,T,2), state_out_h, state_out_c (L,B,H); with
     timing=True also "timing": {calls, first_us, p50_us, p99_us, mean_us} per call."""
@@ -187,11 +189,17 @@ def run_onnx(model_path, imu_orientation, imu_acceleration, state=None, *, frame
         raise ValueError(f"imu_orientation must be (B,T,N,3,3) with N 1..{MAX_SENSORS}, got {ori.shape}")
     if acc.shape != ori.shape[:3] + (3,):
         raise ValueError(f"imu_acceleration must be {ori.shape[:3] + (3,)}, got {acc.shape}")
+    if mask is not None:
+        mask = np.asarray(mask, dtype=np.float32)
+        if mask.shape != ori.shape[:3]:
+            raise ValueError(f"imu_mask must be {ori.shape[:3]}, got {mask.shape}")
     model_path = Path(model_path)
     if not model_path.is_file():
         raise FileNotFoundError(f"model {model_path} does not exist")
     exe = mocapctl_path()
     tensors = {"imu_orientation": ori, "imu_acceleration": acc}
+    if mask is not None:
+        tensors["imu_mask"] = mask
     h, c = _state_arrays(state)
     if h is not None:
         tensors["state_in_h"] = h
@@ -230,7 +238,8 @@ def parse_timing(text: str) -> dict:
 
 
 def model_info(model_path) -> dict:
-    """`mocapctl model-info` parsed: model_name, precision, frame_rate, state_layers,
+    """`mocapctl model-info` parsed: model_name, precision, contract_version, frame_rate,
+    sensor_order, sensor_count, optional (segment names), imu_mask (bool), state_layers,
     state_size, joint_names, joint_parents, rest_offsets (24,3)."""
     r = _run([mocapctl_path(), "model-info", model_path])
     if r.returncode != 0:
@@ -239,7 +248,8 @@ def model_info(model_path) -> dict:
     for line in r.stdout.splitlines():
         parts = line.split()
         if len(parts) >= 2 and parts[0] in ("model_name", "precision", "contract_version",
-                                            "frame_rate", "sensor_order"):
+                                            "frame_rate", "sensor_order", "sensor_count",
+                                            "optional", "imu_mask"):
             info[parts[0]] = " ".join(parts[1:])
         elif parts[:1] == ["state"]:
             info["state_layers"], info["state_size"] = int(parts[2].rstrip(",")), int(parts[4])
@@ -250,4 +260,10 @@ def model_info(model_path) -> dict:
     info["rest_offsets"] = np.array(info["rest_offsets"], dtype=np.float32)
     if "frame_rate" in info:
         info["frame_rate"] = float(info["frame_rate"])
+    if "sensor_count" in info:
+        info["sensor_count"] = int(info["sensor_count"])
+    if "optional" in info:
+        info["optional"] = [] if info["optional"] == "none" else info["optional"].split(",")
+    if "imu_mask" in info:
+        info["imu_mask"] = info["imu_mask"] == "yes"
     return info

@@ -15,6 +15,11 @@ start, otherwise at a random frame). So the network is trained both for a cold s
 as at the start of every engine session) and for long runs with a warm state; a plain
 "zero state at every random window" scheme would only ever see states at most W frames old.
 
+Missing sensors (a masked network, model contract 2: --sensors, --optional, --sensor-dropout): each
+clip a stream plays lacks each optional sensor with probability --optional-absent, and with
+probability --sensor-dropout one present non-pelvis sensor goes silent for a window of
+--dropout-seconds; a missing sensor has mask 0 and zero inputs, as the engine feeds it (SensorMasking).
+
 Losses per frame: rotation (Frobenius distance of the 24 matrices, local, joint 0 global: the
 chordal distance 2 sqrt(2) sin(angle / 2), which grows like the angle the metric averages; the
 squared distance of earlier runs pulls ambiguous joints to the mean of their possible poses),
@@ -53,7 +58,8 @@ from . import skeleton as sk
 from .cli import NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, number_type
 from .errors import CommandError, UsageError
 from .files import atomic_torch_save
-from .model import ModelConfig, PoseNet, count_parameters, forward_kinematics_torch, non_finite_tensors
+from .model import (PELVIS, ModelConfig, PoseNet, check_optional, check_sensors, count_parameters,
+                    forward_kinematics_torch, non_finite_tensors, with_sensors)
 from .rarity import clip_rarity
 from .sensors import DEFAULT_SENSORS
 from .synthesis import Augmentation, synthesize, vary_motion
@@ -97,6 +103,16 @@ class TrainConfig:
     dropout: float | None = 0.1       # PoseNet dropout in training (None: the checkpoint's own)
     anchored: bool = True             # sensor bones as residuals on their measured orientations
     wrist_sensor: str = "hand"        # where the wrist sensors are: "hand" or "forearm" (straps)
+    # The network's sensors (segment names; None: the default six, or the --init-from network's),
+    # which of them are optional (None: none, or the --init-from network's), and whether it takes
+    # the mask of model contract 2 (forced by optional sensors or sensor dropout, and kept by a
+    # masked --init-from network).
+    sensors: tuple | None = None
+    optional: tuple | None = None
+    masked: bool = False
+    optional_absent: float = 0.5      # probability that a clip lacks each optional sensor
+    sensor_dropout: float = 0.0       # probability that a clip loses one sensor for a window
+    dropout_seconds: tuple = (0.5, 5.0)   # that window's length U(a, b), seconds
     drift_frames: int = 60
     eval_every_s: float = 180.0
     ckpt_every_s: float = 120.0
@@ -145,12 +161,55 @@ def pick_device(name: str) -> torch.device:
 
 
 # ------------------------------------------------------------------------------ data
+# The engine holds a sensor that stops sending for its stale_after_s (mocap_session_config,
+# default 0.25 s: mask 1, the last sample repeated) and only then feeds it as missing.
+ENGINE_STALE_AFTER_S = 0.25
+
+
+@dataclass(frozen=True)
+class SensorMasking:
+    """Which sensors a masked network's training clips lack, drawn per clip: each optional sensor
+    is absent from the whole clip with probability optional_absent; with probability
+    window_probability one present non-pelvis sensor stops sending for a window of
+    U(window_seconds) s, which the engine first holds (ENGINE_STALE_AFTER_S) and then feeds as
+    missing. Missing frames have mask 0 and zero inputs, as the engine feeds them."""
+    sensors: tuple
+    optional: tuple = ()
+    optional_absent: float = 0.5
+    window_probability: float = 0.0
+    window_seconds: tuple = (0.5, 5.0)
+
+    def apply(self, sample, rng: np.random.Generator) -> tuple:
+        """(the sample as the engine would feed it, its mask (T,N) float32)."""
+        from dataclasses import replace as replace_fields
+        T, fps = sample.num_frames, sample.fps
+        mask = np.ones((T, len(self.sensors)), np.float32)
+        ori, acc = sample.imu_orientation.copy(), sample.imu_acceleration.copy()
+        for k, name in enumerate(self.sensors):
+            if name in self.optional and rng.random() < self.optional_absent:
+                mask[:, k] = 0.0
+        if self.window_probability > 0 and rng.random() < self.window_probability:
+            present = [k for k, name in enumerate(self.sensors) if name != PELVIS and mask[0, k] > 0]
+            if present:
+                k = present[int(rng.integers(len(present)))]
+                length = max(1, int(round(rng.uniform(*self.window_seconds) * fps)))
+                start = int(rng.integers(0, max(1, T - length + 1)))
+                stop = min(T, start + length)
+                held = min(stop, start + int(round(ENGINE_STALE_AFTER_S * fps))) if start > 0 else start
+                ori[start:held, k] = ori[start - 1, k]
+                acc[start:held, k] = acc[start - 1, k]
+                mask[held:stop, k] = 0.0
+        ori *= mask[..., None, None]
+        acc *= mask[..., None]
+        return replace_fields(sample, imu_orientation=ori, imu_acceleration=acc), mask
+
+
 class StreamBatcher:
     """B streams, each playing an augmented clip window by window (see module docstring)."""
 
     def __init__(self, motions, batch: int, window: int, rng: np.random.Generator,
                  augment: Augmentation | None = Augmentation(), wrist: str = "hand",
-                 rare_boost: float = 0.0, sensors=DEFAULT_SENSORS):
+                 rare_boost: float = 0.0, sensors=DEFAULT_SENSORS, masking: SensorMasking | None = None):
         self.motions = [m for m in motions if m.num_frames >= window + 1]
         if not self.motions:
             raise UsageError(f"no training clip has more than {window} frames (60 Hz)")
@@ -162,18 +221,22 @@ class StreamBatcher:
         self.total_frames = int(lengths.sum())
         self.batch, self.window, self.rng, self.augment = batch, window, rng, augment
         self.wrist, self.sensors = wrist, tuple(sensors)
+        # A masked network's batches carry "imu_mask" (B,W,N); an unmasked one's are unchanged.
+        self.masking = masking
         self.samples = [None] * batch
+        self.masks = [None] * batch
         self.pos = [0] * batch
 
     def state_dict(self) -> dict:
         """What the streams are playing and where: with the numpy generator's state, enough for a
         resumed run to draw exactly the batches the uninterrupted run would have drawn."""
-        return {"samples": list(self.samples), "pos": list(self.pos)}
+        return {"samples": list(self.samples), "pos": list(self.pos), "masks": list(self.masks)}
 
     def load_state_dict(self, state: dict) -> None:
         if len(state["samples"]) != self.batch:
             raise UsageError(f"the checkpoint's batcher has {len(state['samples'])} streams, not {self.batch}")
         self.samples, self.pos = list(state["samples"]), [int(p) for p in state["pos"]]
+        self.masks = list(state.get("masks") or [None] * self.batch)
 
     def close(self) -> None:
         """Nothing to release (ParallelBatcher's counterpart stops its workers)."""
@@ -185,6 +248,8 @@ class StreamBatcher:
             s = synthesize(m, self.rng, self.augment, wrist=self.wrist, sensors=self.sensors)
             if s.num_frames >= self.window:
                 break
+        if self.masking is not None:
+            s, self.masks[i] = self.masking.apply(s, self.rng)
         self.samples[i] = s
         span = s.num_frames - self.window
         self.pos[i] = 0 if (span <= 0 or self.rng.random() < 0.5) else int(self.rng.integers(0, span + 1))
@@ -193,7 +258,7 @@ class StreamBatcher:
         reset = np.zeros(self.batch, dtype=bool)
         keys = ("imu_orientation", "imu_acceleration", "local_rot", "root_velocity", "foot_contact")
         out = {k: [] for k in keys}
-        offsets = []
+        offsets, masks = [], []
         W = self.window
         for i in range(self.batch):
             if self.samples[i] is None or self.pos[i] + W > self.samples[i].num_frames:
@@ -203,9 +268,14 @@ class StreamBatcher:
             for k in keys:
                 out[k].append(getattr(s, k)[a:a + W])
             offsets.append(s.offsets)
+            if self.masking is not None:
+                mask = self.masks[i]
+                masks.append(mask[a:a + W] if mask is not None else np.ones((W, len(self.sensors)), np.float32))
             self.pos[i] = a + W
         batch = {k: torch.from_numpy(np.stack(v)) for k, v in out.items()}
         batch["offsets"] = torch.from_numpy(np.stack(offsets))
+        if self.masking is not None:
+            batch["imu_mask"] = torch.from_numpy(np.stack(masks))
         return batch, torch.from_numpy(reset)
 
 
@@ -233,6 +303,7 @@ class ParallelBatcher:
         # one stream's batch, for the buffers' shapes and types
         probe = copy.copy(base)
         probe.batch, probe.rng, probe.samples, probe.pos = 1, np.random.default_rng(seed), [None], [0]
+        probe.masks = [None]
         one, one_reset = probe.next()
         one["reset"] = one_reset
         need = self.SLOTS * sum(v.element_size() * v.numel() for v in one.values()) * base.batch
@@ -335,7 +406,7 @@ def _play_streams(base: StreamBatcher, streams: int, seed: int, k: int, slots, r
     signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C is the main process's to handle
     torch.set_num_threads(1)
     base.batch, base.rng = streams, np.random.default_rng([seed, k])
-    base.samples, base.pos = [None] * streams, [0] * streams
+    base.samples, base.pos, base.masks = [None] * streams, [0] * streams, [None] * streams
     own = list(range(len(slots)))
     parent = os.getppid()
     try:
@@ -355,12 +426,22 @@ def _play_streams(base: StreamBatcher, streams: int, seed: int, k: int, slots, r
         ready.send(f"{type(e).__name__}: {e}")
 
 
-def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator, sensors=DEFAULT_SENSORS):
-    """sensors: the network's (ModelConfig.sensors), synthesised in its order."""
+def sensor_masking(cfg: TrainConfig, net_config: ModelConfig) -> SensorMasking | None:
+    """What a network's training clips lack (None for a network without the mask)."""
+    if not net_config.masked:
+        return None
+    return SensorMasking(net_config.sensors, net_config.optional, cfg.optional_absent, cfg.sensor_dropout,
+                         tuple(cfg.dropout_seconds))
+
+
+def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator, sensors=DEFAULT_SENSORS,
+                 masking: SensorMasking | None = None):
+    """sensors: the network's (ModelConfig.sensors), synthesised in its order; masking: what a
+    masked network's clips lack (sensor_masking)."""
     base = StreamBatcher(motions, cfg.batch, cfg.window, rng,
                          Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg,
                                       spine_jitter_deg=cfg.spine_jitter_deg, trunk_swap=cfg.trunk_swap),
-                         wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost, sensors=sensors)
+                         wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost, sensors=sensors, masking=masking)
     return ParallelBatcher(base, cfg.data_workers, cfg.seed) if cfg.data_workers > 0 else base
 
 
@@ -462,19 +543,28 @@ def without_root_jumps(motions) -> tuple:
     return kept, [m.name for m in dropped]
 
 
-def validation_set(motions, cfg: TrainConfig, sensors=DEFAULT_SENSORS) -> list:
+def validation_set(motions, cfg: TrainConfig, sensors=DEFAULT_SENSORS, optional=None) -> list:
     """Deterministic: evenly spaced clips, no augmentation, at most val_max_frames each, of the
-    network's sensors."""
+    network's sensors. optional: a masked network's optional sensors (None: no mask): every
+    second clip then lacks them (mask 0, zero inputs), so the best checkpoint serves both sets."""
     if len(motions) > cfg.val_clips:
         idx = np.linspace(0, len(motions) - 1, cfg.val_clips).round().astype(int)
         motions = [motions[i] for i in idx]
     out = []
-    for m in motions:
+    for i, m in enumerate(motions):
         s = synthesize(m, wrist=cfg.wrist_sensor, sensors=sensors)
         n = min(s.num_frames, cfg.val_max_frames)
-        out.append({k: torch.from_numpy(getattr(s, k)[:n][None]) for k in
-                    ("imu_orientation", "imu_acceleration", "local_rot", "root_velocity", "foot_contact")}
-                   | {"offsets": torch.from_numpy(s.offsets[None])})
+        clip = ({k: torch.from_numpy(getattr(s, k)[:n][None]) for k in
+                 ("imu_orientation", "imu_acceleration", "local_rot", "root_velocity", "foot_contact")}
+                | {"offsets": torch.from_numpy(s.offsets[None])})
+        if optional is not None:
+            mask = torch.ones((1, n, len(sensors)))
+            if i % 2:
+                mask[..., [k for k, name in enumerate(sensors) if name in optional]] = 0.0
+            clip["imu_mask"] = mask
+            clip["imu_orientation"] = clip["imu_orientation"] * mask[..., None, None]
+            clip["imu_acceleration"] = clip["imu_acceleration"] * mask[..., None]
+        out.append(clip)
     return out
 
 
@@ -509,7 +599,8 @@ def validate(net: PoseNet, val: list, cfg: TrainConfig, device) -> dict:
     ang_sum = pos_sum = con_acc = 0.0
     for v in val:
         b = {k: t.to(device) for k, t in v.items()}
-        rot, vel, logits, _ = net.forward_raw(b["imu_orientation"], b["imu_acceleration"])
+        rot, vel, logits, _ = net.forward_raw(b["imu_orientation"], b["imu_acceleration"], None,
+                                              b.get("imu_mask"))
         losses = compute_losses((rot, vel, logits), b, cfg)
         T = rot.shape[1]
         for k, x in losses.items():
@@ -658,6 +749,23 @@ def plot_losses(history: dict, path: Path) -> None:
     plt.close(fig)
 
 
+def network_sensors(cfg: TrainConfig, base: ModelConfig | None) -> tuple:
+    """(sensors, optional, masked) of the network a run trains: what cfg asks for, else the
+    --init-from network's own (base), else the default six without a mask. Optional sensors and
+    sensor dropout need the mask, and a masked network stays masked. A UsageError for a list the
+    network cannot take (no pelvis, an optional pelvis, an optional sensor not in the list)."""
+    try:
+        sensors = check_sensors(cfg.sensors) if cfg.sensors else (base.sensors if base else DEFAULT_SENSORS)
+        if cfg.optional is not None:
+            optional = tuple(cfg.optional)
+        else:
+            optional = tuple(n for n in (base.optional if base else ()) if n in sensors)
+        masked = bool(cfg.masked or optional or cfg.sensor_dropout > 0 or (base is not None and base.masked))
+        return sensors, check_optional(sensors, optional, masked), masked
+    except ValueError as e:
+        raise UsageError(f"--sensors / --optional: {e}") from None
+
+
 def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
     blas = setup_threads()
     if blas != "openblas" and not cfg.smoke:
@@ -697,14 +805,25 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
         torch.set_rng_state(ck["torch_rng"])
         print(f"train: resumed at step {step} of {total}")
     else:
-        model_cfg = replace(SIZES[cfg.size], anchored=cfg.anchored, wrist_anchor=cfg.wrist_sensor)
-        net = PoseNet(model_cfg).to(device)
         if cfg.init_from:
             # A warm start: the weights only (e.g. the shipped training/checkpoints/*.pt, which a
             # fresh machine has while training/data/checkpoints/ is gone), so a later run continues
             # from the shipped model on its own schedule instead of from scratch.
             net = load_weights(cfg.init_from, device)
             print(f"train: weights from {cfg.init_from}")
+            sensors, optional, masked = network_sensors(cfg, net.config)
+            if (sensors, optional, masked) != (net.config.sensors, net.config.optional, net.config.masked):
+                # Another sensor set (e.g. the shipped six plus an optional chest): every weight
+                # carries over, the new inputs start at zero (model.with_sensors).
+                net = with_sensors(net, sensors, optional, masked)
+                print(f"train: the network now reads {','.join(sensors)}"
+                      + (f" (optional: {','.join(optional)})" if optional else "")
+                      + (", with the sensor mask" if masked else ""))
+        else:
+            sensors, optional, masked = network_sensors(cfg, None)
+            model_cfg = replace(SIZES[cfg.size], anchored=cfg.anchored, wrist_anchor=cfg.wrist_sensor,
+                                sensors=sensors, optional=optional, masked=masked)
+            net = PoseNet(model_cfg).to(device)
         opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
         if cfg.dropout is not None:
             net.set_dropout(cfg.dropout)
@@ -716,10 +835,11 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
                                  f"training them for the {cfg.wrist_sensor} is not supported")
             net.anchor_wrists_on_forearm()
             print("train: the wrist sensors move from the hands to the forearms (wrist straps)")
-    batcher = make_batcher(motions, cfg, rng, net.config.sensors)
+    batcher = make_batcher(motions, cfg, rng, net.config.sensors, sensor_masking(cfg, net.config))
     if cfg.rare_boost > 0:
         print(f"train: rare poses boosted ({rarity_summary(batcher)})")
-    val = validation_set(val_motions or [], cfg, net.config.sensors) if val_motions else []
+    val = (validation_set(val_motions, cfg, net.config.sensors,
+                          net.config.optional if net.config.masked else None) if val_motions else [])
     steps_per_epoch = max(1, math.ceil(batcher.total_frames / (cfg.batch * cfg.window)))
     print(f"train: {len(batcher.motions)} clips, {batcher.total_frames} frames "
           f"({steps_per_epoch} steps/epoch), {len(val)} val clips, device {device}, blas {blas}, "
@@ -775,7 +895,8 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             h, c = state[0] * keep, state[1] * keep
             for g in opt.param_groups:
                 g["lr"] = _lr(step, total or 10 ** 9, cfg, (time.time() - t_start) / budget_s)
-            rot, vel, logits, (h, c) = net.forward_raw(batch["imu_orientation"], batch["imu_acceleration"], (h, c))
+            rot, vel, logits, (h, c) = net.forward_raw(batch["imu_orientation"], batch["imu_acceleration"], (h, c),
+                                                       batch.get("imu_mask"))
             state = (h.detach(), c.detach())
             losses = compute_losses((rot, vel, logits), batch, cfg)
             # Stop before a non-finite loss or gradient reaches the weights: one such step makes every
@@ -875,7 +996,7 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
 # network's size, anchoring and wrist placement from its model config).
 RESUME_OVERRIDES = ("budget_minutes", "steps", "stop_after", "device", "ckpt_dir", "results_dir", "progress",
                     "resume", "eval_every_s", "ckpt_every_s", "data_workers")
-ARCHITECTURE = ("size", "anchored", "wrist_sensor")
+ARCHITECTURE = ("size", "anchored", "wrist_sensor", "sensors", "optional", "masked")
 _OPTIONS = {"w_pos": "--pos-weight", "arm_jitter_deg": "--arm-jitter",
             "spine_jitter_deg": "--spine-jitter", "anchored": "--no-anchor",
             "train_source": "--bvh", "val_source": "--val-bvh"}
@@ -899,11 +1020,19 @@ def saved_train_config(ck, path="the checkpoint") -> TrainConfig:
     cfg = TrainConfig(**{k: v for k, v in (ck.get("train_config") or {}).items() if k in known})
     mc = checkpoint_model_config(ck["config"], path)
     cfg.anchored, cfg.wrist_sensor = bool(mc.anchored), mc.wrist_anchor
+    cfg.sensors, cfg.optional, cfg.masked = mc.sensors, mc.optional, mc.masked
     cfg.size = next((n for n, c in SIZES.items() if _size_dims(c) == _size_dims(mc)), cfg.size)
     return cfg
 
 
 def _same(key: str, a, b) -> bool:
+    """Whether option `key` asks for the same as the checkpoint's (a: asked, b: saved)."""
+    if key in ("sensors", "optional"):   # None: not asked, the network's own
+        return a is None or b is None or tuple(a) == tuple(b)
+    if key == "masked":   # not asking for the mask is no contradiction of a masked network
+        return not a or bool(b)
+    if key in ("dropout_seconds",):
+        return tuple(a) == tuple(b)
     if key == "size":
         return a in SIZES and b in SIZES and _size_dims(SIZES[a]) == _size_dims(SIZES[b])
     if key in _PATH_OPTIONS and isinstance(a, str) and isinstance(b, str):
@@ -964,7 +1093,8 @@ def config_from_args(args) -> TrainConfig:
     for k in ("budget_minutes", "steps", "stop_after", "batch", "window", "lr", "seed", "device", "size",
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
               "arm_jitter_deg", "spine_jitter_deg", "trunk_swap", "rare_boost", "w_pos", "ckpt_dir",
-              "results_dir", "wrist_sensor", "data_workers", "eval_every_s"):
+              "results_dir", "wrist_sensor", "data_workers", "eval_every_s", "sensors", "optional",
+              "masked", "optional_absent", "sensor_dropout", "dropout_seconds"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -1017,6 +1147,42 @@ PROBABILITY = number_type(float, lambda v: 0 <= v <= 1, "a probability in [0, 1]
 DROPOUT = number_type(float, lambda v: 0 <= v < 1, "a dropout rate in [0, 1)")
 
 
+def _sensor_names(text: str) -> tuple:
+    """--sensors: a sensor list (sensors.sensor_list), checked as the command line is read."""
+    import argparse
+    from .sensors import sensor_list
+    try:
+        return sensor_list(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+def _optional_names(text: str) -> tuple:
+    """--optional: comma-separated segment names ("" or "none": no optional sensor); checked
+    against the network's list when it is known (network_sensors)."""
+    import argparse
+    from .sensors import segment
+    names = tuple(n.strip() for n in text.split(",") if n.strip() and n.strip() != "none")
+    try:
+        for n in names:
+            segment(n)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return names
+
+
+def _seconds_range(text: str) -> tuple:
+    """--dropout-seconds A,B: 0 < A <= B."""
+    import argparse
+    try:
+        a, b = (float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not two numbers A,B (seconds)") from None
+    if not (math.isfinite(a) and math.isfinite(b) and 0 < a <= b):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected 0 < A <= B seconds")
+    return (a, b)
+
+
 def add_arguments(parser) -> None:
     parser.add_argument("--budget-minutes", dest="budget_minutes", type=POSITIVE, default=None,
                         help="wall-clock budget (default 60)")
@@ -1064,6 +1230,24 @@ def add_arguments(parser) -> None:
                         help="where the synthesised wrist sensors are: hand (back of the hands, the "
                              "default and the shipped model's) or forearm (wrist straps; a hand-trained "
                              "--init-from is switched over)")
+    parser.add_argument("--sensors", type=_sensor_names, default=None,
+                        help="the network's sensors, segment names in input order, e.g. "
+                             "pelvis,left_wrist,right_wrist,left_shin,right_shin,head,chest (default: the "
+                             "six of model contract 1, or the --init-from network's; new sensors of an "
+                             "--init-from network start with zero weights)")
+    parser.add_argument("--optional", type=_optional_names, default=None,
+                        help="which of --sensors the network can do without, e.g. chest (a masked "
+                             "network, exported as model contract 2; the pelvis cannot be optional)")
+    parser.add_argument("--masked", action="store_true",
+                        help="give the network the sensor mask input of model contract 2 (implied by "
+                             "--optional and --sensor-dropout)")
+    parser.add_argument("--optional-absent", dest="optional_absent", type=PROBABILITY, default=None,
+                        help="probability that a training clip lacks each optional sensor (default 0.5)")
+    parser.add_argument("--sensor-dropout", dest="sensor_dropout", type=PROBABILITY, default=None,
+                        help="probability that a training clip loses one non-pelvis sensor for a "
+                             "window (--dropout-seconds), as a sensor that stops sending (default 0)")
+    parser.add_argument("--dropout-seconds", dest="dropout_seconds", type=_seconds_range, default=None,
+                        help="length range A,B of a --sensor-dropout window in seconds (default 0.5,5)")
     parser.add_argument("--pos-weight", dest="w_pos", type=NON_NEGATIVE, default=None,
                         help="weight of the joint-position loss (metres) against the rotation "
                              "loss (default 10)")
