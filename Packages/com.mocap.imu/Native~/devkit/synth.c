@@ -202,7 +202,43 @@ static mocap_status check_config(const synth_config *cfg)
     }
     if (present == 0)
         return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "synth: every node id is -1");
+    if (cfg->silence_count > SYNTH_MAX_SILENCES)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "synth: %u silence windows (at most %d)",
+                          (unsigned)cfg->silence_count, SYNTH_MAX_SILENCES);
+    for (uint32_t w = 0; w < cfg->silence_count; w++) {
+        const synth_silence *sl = &cfg->silences[w];
+        int configured = 0;
+        for (int i = 0; i < sensors; i++) configured |= cfg->segments[i] == sl->segment;
+        if (!configured)
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                              "synth: silence window %u: segment %s has no sensor in the set",
+                              (unsigned)w, mocap_segment_name(sl->segment)
+                                               ? mocap_segment_name(sl->segment) : "(invalid)");
+        if (!valid_nonneg(sl->start_s) || !(isfinite(sl->length_s) && sl->length_s > 0.0))
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT,
+                              "synth: silence window %u of %s: start %g s must be >= 0 and "
+                              "length %g s > 0",
+                              (unsigned)w, mocap_segment_name(sl->segment), sl->start_s,
+                              sl->length_s);
+    }
     return MOCAP_OK;
+}
+
+/* Sensors (bit i: config order) inside a silence window at this motion time. Windows are
+ * half-open, [start, start + length), with a hair of slack so that a tick landing on a window
+ * edge is not decided by the rounding of k / rate. */
+static uint32_t silent_sensors(const synth_config *cfg, double motion_t)
+{
+    const double slack = 1e-9;
+    uint32_t mask = 0;
+    for (uint32_t w = 0; w < cfg->silence_count; w++) {
+        const synth_silence *sl = &cfg->silences[w];
+        if (motion_t < sl->start_s - slack || motion_t >= sl->start_s + sl->length_s - slack)
+            continue;
+        for (uint32_t i = 0; i < cfg->sensor_count; i++)
+            if (cfg->segments[i] == sl->segment) mask |= 1u << i;
+    }
+    return mask;
 }
 
 /* The motion moves every segment that has a sensor: checked on its first pose, before anything
@@ -448,10 +484,11 @@ mocap_status synth_generate(const synth_config *cfg, synth_motion_fn motion, voi
                           mocap_rng_uniform(&faults) < cfg->packet_dropout_prob;
         hipnuc_sample present[MOCAP_MAX_SENSORS];
         uint32_t n = 0;
+        info.silent_mask = info.phase == 3 ? silent_sensors(cfg, t - prelude) : 0u;
         for (int i = 0; i < sensors; i++) {
             int drop_node = cfg->node_dropout_prob > 0.0 &&
                             mocap_rng_uniform(&faults) < cfg->node_dropout_prob;
-            if (cfg->node_ids[i] < 0 || drop_node) continue;
+            if (cfg->node_ids[i] < 0 || drop_node || (info.silent_mask & (1u << i))) continue;
             present[n++] = samples[i];
             info.node_mask |= 1u << i;
         }

@@ -7,7 +7,9 @@
  *  - a per-sensor world frame (NWU or ENU, Z up) with an arbitrary heading, as 6-axis sensors
  *    have; an arbitrary fixed mounting rotation of each sensor on its bone;
  *  - accelerations as specific force in g in the sensor frame, angular rate in deg/s;
- *  - optional noise, bias, dropped nodes, dropped packets and corrupted bytes.
+ *  - optional noise, bias, dropped nodes, dropped packets and corrupted bytes;
+ *  - optional silences: a sensor that sends nothing for a window of the motion (a sensor out of
+ *    radio range or with a flat battery, back afterwards).
  * Model frame: right-handed, Y up, character facing +Z, X = character's left. */
 #ifndef MOCAP_SYNTH_H
 #define MOCAP_SYNTH_H
@@ -49,6 +51,20 @@ double synth_trajectory_duration(const synth_trajectory *traj);
 uint32_t synth_trajectory_segment_mask(const synth_trajectory *traj); /* bit s: segment s */
 int synth_trajectory_motion(void *traj, double t, synth_pose *out); /* a synth_motion_fn */
 
+/* Most silence windows a config holds. */
+#define SYNTH_MAX_SILENCES 16
+
+/* One sensor sends nothing from start_s for length_s seconds of motion time (seconds since the
+ * motion started, after the prelude): its blocks are left out of the 0x62 frames of that window.
+ * Its samples are still generated (and their random draws made), so every frame outside the
+ * window is the one the config without it writes (unless bytes are corrupted: those draws
+ * follow the frame lengths). */
+typedef struct synth_silence {
+    int32_t segment;   /* mocap_segment of a configured sensor */
+    double start_s;    /* >= 0 */
+    double length_s;   /* > 0 */
+} synth_silence;
+
 typedef struct synth_config {
     uint64_t seed;
     int32_t world_frame;          /* mocap_world_frame for every sensor */
@@ -80,6 +96,8 @@ typedef struct synth_config {
     double node_dropout_prob;     /* a node missing from one packet */
     double packet_dropout_prob;   /* a whole packet lost */
     double corrupt_byte_prob;     /* each byte flipped to a random value with this probability */
+    uint32_t silence_count;       /* 0 .. SYNTH_MAX_SILENCES */
+    synth_silence silences[SYNTH_MAX_SILENCES];
 } synth_config;
 
 void synth_config_defaults(synth_config *cfg); /* noise-free, no faults, random heading/mounting */
@@ -91,6 +109,7 @@ typedef struct synth_packet_info {
     double t;                  /* seconds since the start of the stream */
     int32_t phase;             /* 0 heading, 1 strapping, 2 T-pose, 3 motion */
     uint32_t node_mask;        /* bit i: sensor i (config order) is present in the packet */
+    uint32_t silent_mask;      /* bit i: sensor i is in one of its silence windows */
     int32_t intact;            /* no byte of this frame was corrupted */
     int32_t dropped;           /* the whole packet was lost (no bytes written) */
     size_t offset;             /* byte offset of the frame in the stream */

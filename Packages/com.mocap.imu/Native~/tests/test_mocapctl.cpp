@@ -2,6 +2,7 @@
 // pseudo-terminal. Output is parsed, so a change that breaks what users read breaks here too.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -352,6 +353,99 @@ TEST(Mocapctl, SensorsListErrorsAreUsageErrors)
     CommandResult r = run_command("synth" + out + " --sensors spine=1");
     EXPECT_NE(r.output.find("known: pelvis, left_wrist, right_wrist, left_shin, right_shin, head, chest"),
               std::string::npos) << r.output;
+}
+
+// --silence: a window of motion time in which one sensor sends nothing. Synth says so, and the
+// replayed frames hold that sensor (then mark it stale) exactly in the window, the others fresh.
+TEST(Mocapctl, SynthSilenceIsAGapOfThatSensorInTheReplayedFrames)
+{
+    std::string dir = test_temp_dir();
+    CommandResult synth = run_command("synth --out " + dir + "/c.cap --motion walk --seconds 8 --seed 2 "
+                                      "--silence right_wrist@3+2");
+    ASSERT_EQ(synth.exit_code, 0) << synth.output;
+    EXPECT_NE(synth.output.find("right_wrist silent from 3.000 s to 5.000 s of the motion"), std::string::npos)
+        << synth.output;
+    CommandResult replay = run_command("replay " + dir + "/c.cap --csv " + dir + "/f.csv");
+    ASSERT_EQ(replay.exit_code, 0) << replay.output;
+
+    // The session clock starts at 1 s; the prelude is 8 s: motion time 3 s is session time 12 s.
+    const double gap_start = 1.0 + 8.0 + 3.0, gap_end = gap_start + 2.0, stale_after = 0.25;
+    const double frame = 1.0 / 60.0, last_sample = gap_start - 1.0 / 100.0;
+    auto bytes = read_file_bytes(dir + "/f.csv");
+    std::istringstream csv(std::string(bytes.begin(), bytes.end()));
+    std::string line;
+    ASSERT_TRUE(std::getline(csv, line));
+    std::vector<std::string> header;
+    {
+        std::istringstream h(line);
+        for (std::string cell; std::getline(h, cell, ',');) header.push_back(cell);
+    }
+    auto column = [&](const std::string &name) {
+        auto it = std::find(header.begin(), header.end(), name);
+        EXPECT_NE(it, header.end()) << name;
+        return (size_t)(it - header.begin());
+    };
+    const size_t time_col = column("time_s");
+    const char *const segments[] = {"pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head"};
+    std::vector<size_t> flag_cols;
+    for (const char *seg : segments) flag_cols.push_back(column(std::string(seg) + "_flags"));
+    int held = 0, stale = 0, around = 0;
+    while (std::getline(csv, line)) {
+        std::vector<std::string> cells;
+        std::istringstream row(line);
+        for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+        ASSERT_EQ(cells.size(), header.size()) << line;
+        const double t = std::stod(cells[time_col]);
+        if (t < gap_start - 1.0 || t > gap_end + 1.0) continue;
+        for (size_t k = 0; k < flag_cols.size(); ++k) {
+            const unsigned flags = (unsigned)std::stoul(cells[flag_cols[k]]);
+            EXPECT_TRUE(flags & MOCAP_SENSOR_CALIBRATED) << segments[k] << " t " << t;
+            const bool in_gap = k == 2 && t > gap_start - frame / 2 && t < gap_end - frame / 2;
+            const bool old = in_gap && t - last_sample > stale_after;
+            EXPECT_EQ((flags & MOCAP_SENSOR_HELD) != 0, in_gap) << segments[k] << " t " << t;
+            EXPECT_EQ((flags & MOCAP_SENSOR_STALE) != 0, old) << segments[k] << " t " << t;
+            held += (flags & MOCAP_SENSOR_HELD) != 0;
+            stale += (flags & MOCAP_SENSOR_STALE) != 0;
+            around += k == 2 && !in_gap;
+        }
+    }
+    EXPECT_EQ(held, 120);   // 2 s at 60 frames/s
+    EXPECT_NEAR(stale, 105, 1);
+    EXPECT_GT(around, 110);  // the frames around the gap were there and fresh
+    // The per-sensor summary counts the same: the right wrist's stale frames, nobody else's.
+    std::smatch m;
+    std::regex row("\n  right_wrist +2 +[0-9.]+% +([0-9]+) +([0-9]+)\\b");
+    ASSERT_TRUE(std::regex_search(replay.output, m, row)) << replay.output;
+    EXPECT_NEAR(std::stoi(m[2]), 105, 1);
+    std::regex others_stale("\n  (pelvis|left_wrist|left_shin|right_shin|head) +[0-9]+ +[0-9.]+% +[0-9]+ +([1-9][0-9]*)\\b");
+    EXPECT_FALSE(std::regex_search(replay.output, m, others_stale)) << replay.output;
+}
+
+TEST(Mocapctl, SilenceWindowsThatAreNotOneAreUsageErrors)
+{
+    std::string dir = test_temp_dir();
+    const std::string out = "synth --out " + dir + "/a.cap";
+    const UsageErrorCase cases[] = {
+        {out + " --silence head", "--silence wants SEGMENT@START+LENGTH"},
+        {out + " --silence head@2", "--silence wants SEGMENT@START+LENGTH"},
+        {out + " --silence head@2+1s", "--silence wants SEGMENT@START+LENGTH"},
+        {out + " --silence @2+1", "--silence wants SEGMENT@START+LENGTH"},
+        {out + " --silence knee@2+1", "no segment 'knee' (pelvis, left_wrist"},
+        {out + " --silence head@-2+1", "the start must be >= 0 s"},
+        {out + " --silence head@2+0", "the length > 0 s"},
+        {out + " --silence head@nan+1", "the start must be >= 0 s"},
+        {out + " --silence chest@2+1", "chest has no sensor in the set (--sensors)"},
+        {out + " --silence head@1+1 --silence", "--silence needs a value"},
+    };
+    expect_usage_errors(cases);
+    EXPECT_FALSE(std::filesystem::exists(dir + "/a.cap")) << "a refused command wrote its output";
+    // Two windows, one of them on a chest the set carries, are taken.
+    CommandResult two = run_command(out + " --motion walk --seconds 4 --silence head@1+1 --sensors "
+                                    "pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=6 "
+                                    "--silence chest@0+0.5");
+    ASSERT_EQ(two.exit_code, 0) << two.output;
+    EXPECT_NE(two.output.find("head silent from 1.000 s to 2.000 s"), std::string::npos) << two.output;
+    EXPECT_NE(two.output.find("chest silent from 0.000 s to 0.500 s"), std::string::npos) << two.output;
 }
 
 // A mistyped option was ignored: the command ran with the default it was meant to change

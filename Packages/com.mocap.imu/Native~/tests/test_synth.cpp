@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -1072,6 +1073,110 @@ TEST(SynthSensorSet, ASilentSensorSendsNothing)
     for (size_t k = 0; k < s.packets.size(); k++) {
         EXPECT_EQ(s.packets[k].info.node_mask, 0x3Fu);
         EXPECT_EQ(d.frames[k].samples.size(), 6u);
+    }
+}
+
+// A silence window leaves one sensor out of exactly the packets whose motion time lies in
+// [start, start + length): absent there (the packet info and the decoded frames agree), present
+// in every packet around it, the other sensors untouched.
+TEST(SynthSilence, ASensorIsAbsentExactlyInItsWindowAndPresentAroundIt)
+{
+    synth_config cfg = short_config();   // 3 s prelude, 4 s of motion at 100 Hz
+    cfg.silence_count = 2;
+    cfg.silences[0] = {MOCAP_SEGMENT_LEFT_WRIST, 1.0, 1.5};
+    cfg.silences[1] = {MOCAP_SEGMENT_HEAD, 3.5, 10.0};   // to the end of the motion
+    Stream s = generate(cfg);
+    DecodeResult d = decode(s.bytes);
+    ASSERT_EQ(d.frames.size(), s.packets.size());
+    const double prelude = cfg.heading_s + cfg.strap_s + cfg.tpose_s;
+    int wrist_silent = 0, head_silent = 0;
+    for (size_t k = 0; k < s.packets.size(); k++) {
+        const synth_packet_info &info = s.packets[k].info;
+        // Tick k is at k / 100 s: the window's edges by the tick number, not by rounded times.
+        const long tick = (long)k - (long)llround(prelude * cfg.rate_hz);
+        const bool wrist_off = tick >= 100 && tick < 250;
+        const bool head_off = tick >= 350;
+        uint32_t expect = 0x3Fu & ~(wrist_off ? 1u << 1 : 0u) & ~(head_off ? 1u << 5 : 0u);
+        ASSERT_EQ(info.node_mask, expect) << "packet " << k << " t " << info.t;
+        ASSERT_EQ(info.silent_mask, (wrist_off ? 1u << 1 : 0u) | (head_off ? 1u << 5 : 0u))
+            << "packet " << k;
+        std::set<uint32_t> nodes;
+        for (const hipnuc_sample &smp : d.frames[k].samples) nodes.insert(smp.node_id);
+        EXPECT_EQ(nodes.count((uint32_t)cfg.node_ids[1]), wrist_off ? 0u : 1u) << "packet " << k;
+        EXPECT_EQ(nodes.count((uint32_t)cfg.node_ids[5]), head_off ? 0u : 1u) << "packet " << k;
+        EXPECT_EQ(nodes.size(), (size_t)popcount(expect)) << "packet " << k;
+        wrist_silent += wrist_off;
+        head_silent += head_off;
+    }
+    EXPECT_EQ(wrist_silent, 150);   // 1.5 s at 100 Hz
+    EXPECT_EQ(head_silent, 51);     // 3.5 .. 4.0 s, both ends of the motion's ticks included
+}
+
+// The window changes nothing else: with noise on, every packet outside it carries the bytes of
+// the capture made without it, and inside it the other sensors' blocks are the same samples.
+TEST(SynthSilence, PacketsOutsideTheWindowAreThoseOfTheCaptureWithoutIt)
+{
+    synth_config cfg = short_config();
+    cfg.acc_noise_g = 0.01;
+    cfg.gyr_noise_dps = 0.3;
+    cfg.quat_noise_deg = 0.3;
+    cfg.acc_bias_g = 0.01;
+    cfg.still_tremor_deg = 0.2;
+    cfg.node_dropout_prob = 0.02;
+    Stream plain = generate(cfg);
+    cfg.silence_count = 1;
+    cfg.silences[0] = {MOCAP_SEGMENT_RIGHT_SHIN, 0.5, 2.0};
+    Stream silent = generate(cfg);
+    ASSERT_EQ(plain.packets.size(), silent.packets.size());
+    DecodeResult dp = decode(plain.bytes), ds = decode(silent.bytes);
+    ASSERT_EQ(dp.frames.size(), ds.frames.size());
+    int inside = 0;
+    for (size_t k = 0; k < plain.packets.size(); k++) {
+        if (silent.packets[k].info.silent_mask == 0) {
+            EXPECT_EQ(silent.packets[k].bytes, plain.packets[k].bytes) << "packet " << k;
+            continue;
+        }
+        inside++;
+        EXPECT_EQ(silent.packets[k].info.node_mask, plain.packets[k].info.node_mask & ~(1u << 4));
+        std::vector<const hipnuc_sample *> others;
+        for (const hipnuc_sample &smp : dp.frames[k].samples)
+            if (smp.node_id != (uint32_t)cfg.node_ids[4]) others.push_back(&smp);
+        ASSERT_EQ(ds.frames[k].samples.size(), others.size()) << "packet " << k;
+        for (size_t j = 0; j < others.size(); j++)
+            EXPECT_EQ(std::memcmp(&ds.frames[k].samples[j], others[j], sizeof(hipnuc_sample)), 0)
+                << "packet " << k << " block " << j;
+    }
+    EXPECT_EQ(inside, 200);
+}
+
+TEST(SynthSilence, BadWindowsAreRefusedNamingTheProblem)
+{
+    struct Case {
+        std::function<void(synth_config &)> change;
+        const char *needle;
+    };
+    const Case cases[] = {
+        {[](synth_config &c) { c.silence_count = SYNTH_MAX_SILENCES + 1; }, "silence windows"},
+        {[](synth_config &c) { c.silence_count = 1; c.silences[0] = {MOCAP_SEGMENT_CHEST, 1.0, 1.0}; },
+         "chest has no sensor"},
+        {[](synth_config &c) { c.silence_count = 1; c.silences[0] = {42, 1.0, 1.0}; },
+         "(invalid) has no sensor"},
+        {[](synth_config &c) { c.silence_count = 1; c.silences[0] = {MOCAP_SEGMENT_HEAD, -1.0, 1.0}; },
+         "start -1 s"},
+        {[](synth_config &c) { c.silence_count = 1; c.silences[0] = {MOCAP_SEGMENT_HEAD, 1.0, 0.0}; },
+         "length 0 s"},
+        {[](synth_config &c) { c.silence_count = 1; c.silences[0] = {MOCAP_SEGMENT_HEAD, NAN, 1.0}; },
+         "silence window 0 of head"},
+    };
+    for (const Case &k : cases) {
+        synth_config cfg = short_config();
+        k.change(cfg);
+        Stream s;
+        EXPECT_EQ(synth_generate(&cfg, nullptr, nullptr, collect_packet, &s), MOCAP_ERR_INVALID_ARGUMENT)
+            << k.needle;
+        EXPECT_TRUE(s.packets.empty());
+        EXPECT_NE(std::string(mocap_last_error()).find(k.needle), std::string::npos)
+            << k.needle << ": " << mocap_last_error();
     }
 }
 

@@ -1,6 +1,9 @@
 /* mocapctl synth: a capture of a known motion (built-in, or a trajectory file:
  * docs/synth-trajectory.md) with its calibration prelude and, with --truth, the truth CSV. */
+#include <errno.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli_args.h"
@@ -8,6 +11,76 @@
 #include "report.h"
 #include "sensor_set.h"
 #include "synth.h"
+
+#define SILENCE_FORMAT "SEGMENT@START+LENGTH (seconds of motion time, e.g. left_wrist@10+5)"
+
+/* "SEGMENT@START+LENGTH" into out (the segment by name, whether or not it has a sensor). 0, or
+ * -1 after printing why. */
+static int parse_silence(const char *text, synth_silence *out)
+{
+    const char *at = strchr(text, '@');
+    char name[64];
+    if (!at || at == text || (size_t)(at - text) >= sizeof name) {
+        fprintf(stderr, "mocapctl: --silence wants " SILENCE_FORMAT ", got '%s'\n", text);
+        return -1;
+    }
+    memcpy(name, text, (size_t)(at - text));
+    name[at - text] = '\0';
+    out->segment = mocap_segment_find(name);
+    if (out->segment < 0) {
+        fprintf(stderr, "mocapctl: --silence %s: no segment '%s' (", text, name);
+        for (int32_t s = 0; s < mocap_segment_count(); ++s)
+            fprintf(stderr, "%s%s", s ? ", " : "", mocap_segment_name(s));
+        fputs(")\n", stderr);
+        return -1;
+    }
+    char *end = NULL;
+    errno = 0;
+    out->start_s = strtod(at + 1, &end);
+    int bad = end == at + 1 || *end != '+' || errno == ERANGE;
+    if (!bad) {
+        const char *length = end + 1;
+        out->length_s = strtod(length, &end);
+        bad = end == length || *end != '\0' || errno == ERANGE;
+    }
+    if (bad) {
+        fprintf(stderr, "mocapctl: --silence wants " SILENCE_FORMAT ", got '%s'\n", text);
+        return -1;
+    }
+    if (!(isfinite(out->start_s) && out->start_s >= 0.0 && isfinite(out->length_s) &&
+          out->length_s > 0.0 && out->start_s + out->length_s <= 86400.0)) {
+        fprintf(stderr, "mocapctl: --silence %s: the start must be >= 0 s and the length > 0 s, "
+                        "within a day\n", text);
+        return -1;
+    }
+    return 0;
+}
+
+/* Every --silence of the command line into cfg, each checked against the sensor set. 0, or 2
+ * after printing the usage error. */
+static int silences_from_args(int argc, char **argv, synth_config *cfg)
+{
+    cfg->silence_count = 0;
+    for (int i = 0; i < argc; ++i) {
+        if (strcmp(argv[i], "--silence") != 0) continue;
+        const char *text = cli_value(argc - i, argv + i, "--silence");
+        if (cfg->silence_count == SYNTH_MAX_SILENCES) {
+            fprintf(stderr, "mocapctl: more than %d --silence windows\n", SYNTH_MAX_SILENCES);
+            return 2;
+        }
+        synth_silence *sl = &cfg->silences[cfg->silence_count];
+        if (parse_silence(text, sl) != 0) return 2;
+        int in_set = 0;
+        for (uint32_t k = 0; k < cfg->sensor_count; ++k) in_set |= cfg->segments[k] == sl->segment;
+        if (!in_set) {
+            fprintf(stderr, "mocapctl: --silence %s: %s has no sensor in the set (--sensors)\n",
+                    text, mocap_segment_name(sl->segment));
+            return 2;
+        }
+        cfg->silence_count++;
+    }
+    return 0;
+}
 
 int cmd_synth(int argc, char **argv)
 {
@@ -51,6 +124,7 @@ int cmd_synth(int argc, char **argv)
         cfg.segments[i] = set.sensor_segments[i];
         cfg.node_ids[i] = set.node_ids[i];
     }
+    if (silences_from_args(argc, argv, &cfg) != 0) return 2;
     set.optional_mask = 0;
     char described[512];
     sensor_set_describe(&set, described, sizeof described);
@@ -85,6 +159,15 @@ int cmd_synth(int argc, char **argv)
            traj_path ? "the trajectory" : motion_name ? motion_name : "mixed",
            cfg.world_frame == MOCAP_WORLD_ENU ? "ENU" : "NWU",
            (unsigned long long)cfg.seed, truth ? ", truth " : "", truth ? truth : "");
+    for (uint32_t w = 0; w < cfg.silence_count; ++w) {
+        const synth_silence *sl = &cfg.silences[w];
+        const double shown_length = cfg.motion_s < motion_length ? cfg.motion_s : motion_length;
+        printf("  %s silent from %.3f s to %.3f s of the motion\n", mocap_segment_name(sl->segment),
+               sl->start_s, sl->start_s + sl->length_s);
+        if (sl->start_s >= shown_length)
+            fprintf(stderr, "mocapctl: note: the %s silence starts after the motion's end (%.1f s)\n",
+                    mocap_segment_name(sl->segment), shown_length);
+    }
     if (clipped)
         fprintf(stderr, "mocapctl: note: the motion ends after %.1f s, so the capture is shorter "
                         "than --seconds %s\n", motion_length, cli_value(argc, argv, "--seconds"));

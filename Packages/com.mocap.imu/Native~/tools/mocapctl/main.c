@@ -31,6 +31,7 @@ static const mocapctl_command COMMANDS[] = {
      "usage: mocapctl synth --out CAPTURE [--truth CSV] [--motion walk|arms|squat|turn|mixed]\n"
      "                      [--seconds S] [--world nwu|enu] [--noise none|realistic] [--seed N]\n"
      "                      [--corrupt P] [--dropout P] [--trajectory FILE] [--sensors LIST]\n"
+     "                      [--silence SEGMENT@START+LENGTH ...]\n"
      "A 0x62 capture of the sensor set (default: six nodes): a calibration prelude (heading 3 s,\n"
      "strap 2 s, T-pose 3 s), then the motion. The truth CSV has a column group per sensor.\n"
      "  --out CAPTURE        the capture to write\n"
@@ -43,6 +44,8 @@ static const mocapctl_command COMMANDS[] = {
      "  --seed N             random seed (default 1)\n"
      "  --corrupt P          probability of a corrupted byte\n"
      "  --dropout P          probability of a node missing from a gateway frame\n"
+     "  --silence SEG@S+L    the sensor on segment SEG sends nothing from S to S+L seconds of\n"
+     "                       the motion (after the prelude); repeatable, up to 16\n"
      SENSOR_SET_HELP,
      cmd_synth},
     {"replay", MOCAPCTL_REPLAY_OPTIONS, "decode, calibrate and solve a capture; accuracy against a truth",

@@ -7,7 +7,7 @@
 
 #define MOCAPCTL_SYNTH_OPTIONS                                                                    \
     "--out= --truth= --motion= --seconds= --world= --noise= --seed= --corrupt= --dropout= "      \
-    "--trajectory= --sensors="
+    "--trajectory= --sensors= --silence="
 #define MOCAPCTL_REPLAY_OPTIONS                                                                   \
     "--truth= --calibration= --prelude= --save-calibration= --csv= --realtime --rate= "         \
     "--model= --out= --bvh-order= --json= --pose-csv= --metrics-json= --smoothing= --sensors="
