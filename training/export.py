@@ -216,7 +216,7 @@ def fixture_mask(net, ori, acc, seed: int = 0) -> tuple:
     rng = np.random.default_rng(seed)
     b, t, n = ori.shape[:3]
     mask = np.ones((b, t, n), np.float32)
-    droppable = [k for k, name in enumerate(sensors) if name != "pelvis"]
+    droppable = [k for k, name in enumerate(sensors) if name != "pelvis" and name not in net.config.optional]
     for i in range(1, b):
         for k, name in enumerate(sensors):
             if name in net.config.optional:

@@ -782,6 +782,13 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
             raise UsageError(_nothing_to_resume(ckpt_dir))
         ck = load_checkpoint_file(last, device)
         check_resume_config(cfg, ck, last)
+    if ck is None:   # a sensor list the network cannot take fails before the data is loaded
+        base = None
+        if cfg.init_from:
+            warm = load_checkpoint_file(cfg.init_from)
+            require_pose_checkpoint(warm, cfg.init_from)
+            base = checkpoint_model_config(warm["config"], cfg.init_from)
+        network_sensors(cfg, base)
     if motions is None:
         motions, val_motions = load_data(cfg)
     check_finite_motions(motions, "training")
