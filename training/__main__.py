@@ -1,7 +1,7 @@
 """python3 -m training <command>: the pose model's tooling, from motion data to the shipped ONNX.
 
 Commands: prepare | pack | train | average | export | quantize | evaluate | sensor-gain |
-synth-capture | tip-model.
+synth-capture | missing-sensor | tip-model.
 
 Each subcommand imports its module lazily, so --help works while a module is missing."""
 from __future__ import annotations
@@ -20,6 +20,7 @@ COMMANDS = {
     "evaluate": ("evaluate", "metrics of PyTorch / ONNX models on held-out clips"),
     "sensor-gain": ("sensor_gain", "where a seventh sensor would cut the pose error most (an estimate)"),
     "synth-capture": ("synth_capture", "BVH clip -> raw HiPNUC capture via mocapctl synth"),
+    "missing-sensor": ("dropout_eval", "each sensor silent for 5 s in turn, scored through the engine"),
     "tip-model": ("tip_model", "TIP-shaped ONNX network, random weights (mocapctl bench tip)"),
 }
 

@@ -71,6 +71,7 @@ INPUTS = {
     "quantize": [("model", "file", "--model")],
     "average": [("checkpoints", "files", "checkpoint")],
     "synth-capture": [("bvh", "file", "BVH")],
+    "missing-sensor": [("bvh", "bvh_or_pack", "--bvh"), ("model", "file", "--model")],
 }
 
 

@@ -3,6 +3,7 @@
     python3 -m training synth-capture CLIP.bvh --out CAPTURE [--truth POSE.npz]
         [--truth-csv CSV] [--sensor-truth CSV] [--seed N] [--world nwu|enu] [--noise realistic|none]
         [--lead-in S] [--keep-trajectory] [--sensors SEGMENT,SEGMENT,...]
+        [--silence SEGMENT@START+LENGTH ...]
 
 Steps: BVH -> Motion (bvh.read_bvh + retarget.to_smpl_motion, 60 Hz) -> a lead-in of S seconds
 (default 1) blending from the rest T-pose (every joint identity, facing +Z, as the calibration
@@ -12,7 +13,10 @@ augmentation) resampled to 100 Hz -> the trajectory text file of
 Packages/com.mocap.imu/Native~/docs/synth-trajectory.md -> `mocapctl synth --trajectory FILE
 --out CAPTURE --truth SENSOR_CSV --noise realistic --seed N --world W`, which adds the
 calibration prelude (heading 3 s, strapping 2 s, T-pose 3 s), random mountings and headings and
-realistic sensor noise.
+realistic sensor noise. --silence SEGMENT@START+LENGTH (repeatable) makes that segment's sensor
+send nothing from START for LENGTH seconds of the trajectory's time (0 = the start of the
+lead-in, the first truth frame; `mocapctl synth --silence`): its blocks are left out of the
+frames, as a sensor out of radio range would be, and every other byte is the capture's without it.
 
 Ground truth pose file (--truth, default CAPTURE with suffix .truth.npz), numpy .npz:
     local_rot        (N,24,3,3) float32  joint 0 global (model frame), others local to parent
@@ -27,6 +31,8 @@ Ground truth pose file (--truth, default CAPTURE with suffix .truth.npz), numpy 
     prelude_s        ()  float           calibration prelude length in the capture
     clip, world, seed                    provenance
     sensors          (N,) str            the capture's segments, in node order of the capture
+    silences         (K,) str            the silence windows, "SEGMENT@START+LENGTH" (seconds
+                                         after truth frame 0), none when K = 0
 The same pose truth as CSV (--truth-csv, default CAPTURE with suffix .truth.csv), for tools
 without numpy (`mocapctl replay CAPTURE --model M --truth CAPTURE.truth.csv` prints the pose
 accuracy of the whole byte-level pipeline): a header line, then one line per truth frame:
@@ -45,6 +51,7 @@ import math
 import os
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +67,53 @@ TRAJECTORY_RATE = 100.0
 # table's order, which mocapctl synth also writes without --sensors.
 TRAJECTORY_SENSORS = DEFAULT_SENSORS
 MAX_LEAD_IN_S = 60.0   # a blend from the T-pose into the clip; minutes of it would be a mistake
+MAX_SILENCES = 16      # the generator's SYNTH_MAX_SILENCES
+
+
+@dataclass(frozen=True)
+class Silence:
+    """The sensor on `segment` sends nothing from `start_s` for `length_s` seconds (time since
+    the capture's motion, lead-in included, began: truth frame 0)."""
+    segment: str
+    start_s: float
+    length_s: float
+
+    def __str__(self) -> str:
+        return f"{self.segment}@{float(self.start_s)!r}+{float(self.length_s)!r}"
+
+    @property
+    def end_s(self) -> float:
+        return self.start_s + self.length_s
+
+
+def parse_silence(text) -> Silence:
+    """"SEGMENT@START+LENGTH" (a Silence passes through); ValueError saying what is wrong."""
+    if isinstance(text, Silence):
+        segment, start_s, length_s = text.segment, float(text.start_s), float(text.length_s)
+    else:
+        segment, at, window = str(text).partition("@")
+        start, plus, length = window.partition("+")
+        try:
+            if not (segment and at and plus):
+                raise ValueError
+            start_s, length_s = float(start), float(length)
+        except ValueError:
+            raise ValueError(f"{text!r} is not SEGMENT@START+LENGTH (seconds, e.g. "
+                             f"left_wrist@10+5)") from None
+    if not (math.isfinite(start_s) and start_s >= 0 and math.isfinite(length_s) and length_s > 0):
+        raise ValueError(f"{text!r}: the start must be >= 0 s and the length > 0 s")
+    return Silence(segment, start_s, length_s)
+
+
+def silence_list(silences, sensors) -> list:
+    """Silence windows (strings or Silence) checked against the capture's segments."""
+    out = [parse_silence(s) for s in (silences or ())]
+    if len(out) > MAX_SILENCES:
+        raise ValueError(f"{len(out)} silence windows, at most {MAX_SILENCES}")
+    for s in out:
+        if s.segment not in sensors:
+            raise ValueError(f"{s}: {s.segment} is not one of the capture's sensors ({', '.join(sensors)})")
+    return out
 
 
 def _smooth(u):
@@ -192,10 +246,11 @@ def _remove_new(paths, existed: dict) -> None:
 
 def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="nwu",
                   noise="realistic", lead_in=1.0, keep_trajectory=False, motion=None,
-                  truth_csv=None, sensors=TRAJECTORY_SENSORS):
+                  truth_csv=None, sensors=TRAJECTORY_SENSORS, silences=()):
     """Write CAPTURE, its sensor truth CSV and the pose truth .npz; returns a dict of paths and
     facts. `motion` (a Motion) replaces reading bvh_path when given. sensors: the segments the
-    capture carries (node ids from sensors.node_ids)."""
+    capture carries (node ids from sensors.node_ids). silences: Silence windows (or their
+    "SEGMENT@START+LENGTH" text) in which a sensor sends nothing."""
     from .ort import mocapctl_path
     if not (isinstance(seed, (int, np.integer)) and 0 <= int(seed) < 2 ** 64):
         raise UsageError(f"--seed {seed}: a whole number from 0 to 2^64-1")
@@ -207,6 +262,10 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
         sensor_offsets(sk.DEFAULT_OFFSETS, sensors)   # a segment without a placement: refused now
     except ValueError as e:
         raise UsageError(f"--sensors: {e}") from e
+    try:
+        silences = silence_list(silences, sensors)
+    except ValueError as e:
+        raise UsageError(f"--silence {e}") from e
     if str(out).endswith(("/", os.sep)):
         raise UsageError(f"--out {out}: names a folder; give the capture file to write")
     out = Path(out)
@@ -250,6 +309,8 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
                "--noise", noise]
         if sensors != DEFAULT_SENSORS:
             cmd += ["--sensors", ",".join(f"{n}={node}" for n, node in zip(sensors, node_ids(sensors)))]
+        for silence in silences:
+            cmd += ["--silence", str(silence)]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise CommandError("mocapctl synth failed: " + (r.stderr.strip() or f"status {r.returncode}"))
@@ -262,7 +323,8 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
                  fps=np.float64(full.fps), joint_names=np.array(sk.JOINT_NAMES),
                  parents=np.array(sk.PARENTS), motion_start=np.int64(n_lead),
                  t_session_start=np.float64(t_motion), prelude_s=np.float64(t_motion - t_first),
-                 clip=str(motion.name), world=world, seed=np.int64(seed), sensors=np.array(sensors))
+                 clip=str(motion.name), world=world, seed=np.int64(seed), sensors=np.array(sensors),
+                 silences=np.array([str(s) for s in silences], dtype=str))
         writing = truth_csv
         write_truth_csv(truth_csv, full.local_rot, full.root_pos, full.fps, t_motion, n_lead)
     except OSError as e:
@@ -275,7 +337,7 @@ def synth_capture(bvh_path, out, truth=None, sensor_truth=None, seed=1, world="n
     return {"capture": out, "truth": truth, "truth_csv": truth_csv, "sensor_truth": sensor_truth,
             "trajectory": traj if keep_trajectory else None, "frames": full.num_frames,
             "motion_start": n_lead, "t_session_start": t_motion, "prelude_s": t_motion - t_first,
-            "mocapctl": r.stdout.strip()}
+            "silences": silences, "mocapctl": r.stdout.strip()}
 
 
 def load_truth(path) -> dict:
@@ -305,6 +367,9 @@ def add_arguments(p=None):
     p.add_argument("--sensors", default=",".join(DEFAULT_SENSORS),
                    help="the capture's segments, comma-separated (default: the engine's default "
                         "set); segments without a default node get the lowest free node ids")
+    p.add_argument("--silence", action="append", default=[], metavar="SEGMENT@START+LENGTH",
+                   help="that segment's sensor sends nothing from START for LENGTH seconds after "
+                        "the motion (lead-in included) begins; repeatable")
     return p
 
 
@@ -314,7 +379,8 @@ def main(args=None):
     info = synth_capture(args.bvh, args.out, args.truth, args.sensor_truth, args.seed, args.world,
                          args.noise, args.lead_in, args.keep_trajectory,
                          truth_csv=getattr(args, "truth_csv", None),
-                         sensors=getattr(args, "sensors", None) or TRAJECTORY_SENSORS)
+                         sensors=getattr(args, "sensors", None) or TRAJECTORY_SENSORS,
+                         silences=getattr(args, "silence", None) or ())
     print(info["mocapctl"])
     print(f"synth-capture: {info['capture']} ({info['frames']} truth frames, clip from frame "
           f"{info['motion_start']}, truth frame 0 at session t={info['t_session_start']:.3f} s "

@@ -1,0 +1,237 @@
+"""missing-sensor: the freeze / explode / recovery measures on series whose answer is known, a
+broken condition caught by the per-condition scores, and one short run through mocapctl in which
+the silence is exactly where it was put."""
+import json
+import math
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from training import dropout_eval as de
+from training import ort, procedural
+from training import skeleton as sk
+from training.errors import UsageError
+
+FPS = 60.0
+needs_ort = pytest.mark.skipif(not ort.onnx_runtime_available(),
+                               reason="ONNX Runtime not fetched (scripts/fetch_onnxruntime.sh)")
+
+
+# ------------------------------------------------------------------------------ measures
+def test_moving_average_is_centred_and_shrinks_at_the_ends():
+    x = np.array([0.0, 0.0, 3.0, 0.0, 0.0, 6.0])
+    np.testing.assert_allclose(de.moving_average(x, 3), [0.0, 1.0, 1.0, 1.0, 2.0, 3.0])
+    np.testing.assert_allclose(de.moving_average(x, 1), x)
+    assert de.longest_run([0, 1, 1, 0, 1, 1, 1, 0]) == 3 and de.longest_run([]) == 0
+
+
+def test_a_pose_that_stops_while_the_truth_moves_is_a_freeze_of_about_that_length():
+    truth = np.full(600, 1.0)                 # joints moving at 1 m/s for 10 s
+    pred = truth.copy()
+    pred[180:360] = 0.0                       # the pose stands still for 3 s
+    frozen = de.longest_freeze(pred, truth, FPS, moving=0.1)
+    # The 0.5 s averaging trims the edges: a quarter of a second at most on each side.
+    assert 2.6 <= frozen <= 3.0, frozen
+    assert de.longest_freeze(truth, truth, FPS, moving=0.1) == 0.0
+    # Slow is not frozen; nor is standing still while the truth stands still.
+    assert de.longest_freeze(np.full(600, 0.5), truth, FPS, moving=0.1) == 0.0
+    assert de.longest_freeze(np.zeros(600), np.full(600, 0.05), FPS, moving=0.1) == 0.0
+    # Only frames of the window count.
+    window = np.zeros(600, bool)
+    window[300:] = True
+    assert 0.8 <= de.longest_freeze(pred, truth, FPS, moving=0.1, window=window) <= 1.0
+
+
+def test_exploding_frames_are_nan_huge_joint_errors_and_root_jumps():
+    T = 50
+    angle = np.full((T, 24), 10.0)
+    root = np.cumsum(np.full((T, 3), 0.01), axis=0)
+    finite = np.ones(T, bool)
+    assert not de.exploded_frames(angle, root, finite).any()
+    angle[7, 13] = 95.0                       # one joint turned the wrong way
+    angle[20, 3] = np.nan                     # a NaN angle
+    finite[30] = False                        # a NaN pose
+    root[40:, 0] += 0.6                       # the root jumps 0.6 m between frames 39 and 40
+    assert set(np.nonzero(de.exploded_frames(angle, root, finite))[0]) == {7, 20, 30, 40}
+    root[40:, 0] -= 0.2                       # 0.4 m: a fast step, not an explosion
+    assert set(np.nonzero(de.exploded_frames(angle, root, finite))[0]) == {7, 20, 30}
+
+
+def test_recovery_time_is_when_the_error_is_back_near_the_reference_and_stays():
+    t = np.arange(1200) / FPS                 # 20 s, gap ends at 10 s
+    ref = np.full_like(t, 10.0)
+    gap_end, tau = 10.0, 0.5
+    err = np.where(t < gap_end, 30.0, 10.0 + 20.0 * np.exp(-(t - gap_end) / tau))
+    # 10 + 20 exp(-x / tau) <= 1.2 * 10 + slack 0.5 at x = tau ln(20 / 2.5)
+    expect = tau * math.log(20.0 / 2.5)
+    got = de.recovery_time(t, [err], [ref], [0.5], gap_end, FPS)
+    assert abs(got - expect) < 0.1, (got, expect)
+    assert de.recovery_time(t, [ref], [ref], [0.5], gap_end, FPS) == 0.0
+    # Never back: inf. Back only for a moment (shorter than the hold): not yet recovered there.
+    assert de.recovery_time(t, [np.full_like(t, 20.0)], [ref], [0.5], gap_end, FPS) == math.inf
+    blip = np.where(t < 14.0, 20.0, 10.0)
+    blip[(t >= 11.0) & (t < 11.5)] = 10.0
+    got = de.recovery_time(t, [blip], [ref], [0.5], gap_end, FPS)
+    assert 4.0 <= got <= 4.25, got   # back for good at 14 s, a few frames later once averaged
+    # Every series must be back: a second one still off keeps it unrecovered.
+    assert de.recovery_time(t, [ref, np.full_like(t, 20.0)], [ref, ref], [0.5, 0.3], gap_end,
+                            FPS) == math.inf
+
+
+# ------------------------------------------------------------------------------ a broken condition
+def _run(motion, pred_local=None, pred_root=None, flags=None):
+    T = motion.num_frames
+    return de.Run(t=np.arange(T) / motion.fps, fps=motion.fps,
+                  flags=np.zeros(T, np.int64) if flags is None else flags,
+                  pred_local=motion.local_rot.astype(np.float64).copy() if pred_local is None else pred_local,
+                  pred_root=motion.root_pos.astype(np.float64).copy() if pred_root is None else pred_root,
+                  true_local=motion.local_rot.astype(np.float64), offsets=np.asarray(motion.offsets, np.float64),
+                  finite=np.ones(T, bool), metrics={})
+
+
+def _score(motion, run, ref_run, windows, bone=20):
+    ref = (ref_run, de.frame_errors(ref_run))
+    return de.score_condition(motion.name, "left_wrist", run, de.frame_errors(run), windows, ref=ref, bone=bone)
+
+
+def test_the_scores_catch_a_frozen_an_exploding_and_a_never_recovering_pose():
+    motion = procedural.make_motion("walk", 14.0, seed=4, name="walk")
+    windows = de.Windows(5.0, 8.0)
+    ref = _run(motion)
+    fine = _score(motion, _run(motion), ref, windows)
+    assert fine.freeze_body == 0.0 and fine.freeze_bone == 0.0 and fine.explode == 0
+    assert fine.recovery == 0.0 and fine.same_before_gap == 0.0
+    assert fine.angle["gap"] / fine.frames["gap"] < 0.01 and fine.bone < 0.01
+
+    t = ref.t
+    gap = (t >= 5.0) & (t < 8.0)
+    frozen = motion.local_rot.astype(np.float64).copy()
+    frozen[gap] = frozen[np.argmax(gap)]            # the whole pose held through the gap
+    s = _score(motion, _run(motion, frozen), ref, windows)
+    assert 2.5 <= s.freeze_body <= 3.1 and 2.5 <= s.freeze_bone <= 3.1, (s.freeze_body, s.freeze_bone)
+    assert s.angle["gap"] / s.frames["gap"] > 5.0 and s.recovery < 0.3
+
+    exploding = motion.local_rot.astype(np.float64).copy()
+    exploding[gap, 18] = exploding[gap, 18] @ sk.rot_axis("z", np.pi)[None]   # elbow turned 180 deg
+    root = motion.root_pos.astype(np.float64).copy()
+    root[np.argmax(gap) + 30:] += 1.0                                         # and a 1 m jump
+    s = _score(motion, _run(motion, exploding, root), ref, windows)
+    assert s.explode == int(gap.sum()) and s.explode_elsewhere == 0
+
+    drifting = motion.local_rot.astype(np.float64).copy()
+    drifting[t >= 5.0, 13] = drifting[t >= 5.0, 13] @ sk.rot_axis("x", np.radians(60.0))[None]
+    s = _score(motion, _run(motion, drifting), ref, windows)
+    assert s.recovery == math.inf
+
+    # The silence changed the poses before the gap: the check says by how much.
+    early = motion.local_rot.astype(np.float64).copy()
+    early[10, 4] = early[10, 4] @ sk.rot_axis("y", np.radians(2.0))
+    assert _score(motion, _run(motion, early), ref, windows).same_before_gap == pytest.approx(2.0, abs=1e-3)
+
+
+def test_flags_outside_the_gap_are_counted_beyond_the_reference_run():
+    motion = procedural.make_motion("arm_swing", 12.0, seed=2)
+    windows = de.Windows(4.0, 7.0)
+    ref_flags = np.zeros(motion.num_frames, np.int64)
+    ref_flags[-5:] = de.POSE_INCOMPLETE                   # the capture's last frames, both runs
+    flags = ref_flags.copy()
+    t = np.arange(motion.num_frames) / motion.fps
+    flags[(t >= 4.0) & (t < 7.0)] |= de.POSE_INCOMPLETE
+    ref = _run(motion, flags=ref_flags)
+    s = _score(motion, _run(motion, flags=flags), ref, windows)
+    assert s.incomplete_in_gap == s.frames["gap"] == 180 and s.incomplete_extra == 0
+    flags[(t >= 7.0) & (t < 7.5)] |= de.POSE_INCOMPLETE   # a silence longer than asked
+    s = _score(motion, _run(motion, flags=flags), ref, windows)
+    assert s.incomplete_extra == 30
+
+
+def test_clips_are_chosen_evenly_among_the_long_enough_and_cut():
+    motions = [procedural.make_motion("walk", s, seed=i, name=f"c{i}")
+               for i, s in enumerate([5, 21, 30, 22, 40, 19.9, 26])]
+    chosen = de.choose_clips(motions, 3, clip_s=25.0, min_s=20.0)
+    assert [m.name for m in chosen] == ["c1", "c3", "c6"]
+    assert [m.num_frames for m in chosen] == [21 * 60, 22 * 60, 25 * 60]
+    with pytest.raises(UsageError, match="no clip is 50 s or longer"):
+        de.choose_clips(motions, 3, min_s=50.0)
+    with pytest.raises(UsageError, match="too short"):
+        de.gap_window(motions[0], 5.0)
+    w = de.gap_window(chosen[2], 5.0)
+    assert (w.gap_start, w.gap_end) == (1.0 + 10.0, 1.0 + 15.0)
+
+
+def test_bad_options_are_usage_errors(tmp_path):
+    with pytest.raises(UsageError, match="no such file"):
+        de.main(["--procedural", "--model", str(tmp_path / "none.onnx")])
+
+
+@needs_ort
+def test_bad_segment_options_are_usage_errors():
+    with pytest.raises(UsageError, match="chest is not a sensor of mocap_pose_int8.onnx"):
+        de.main(["--procedural", "--segments", "chest"])
+    with pytest.raises(UsageError, match="leaves no room"):
+        de.main(["--procedural", "--clip-seconds", "6", "--seconds", "5"])
+
+
+# ------------------------------------------------------------------------------ through mocapctl
+@needs_ort
+def test_a_short_run_through_mocapctl_has_the_gap_where_it_was_put(tmp_path):
+    """One procedural clip, the right wrist silent for 2 s: the report, and in the replayed
+    frames the sensor held exactly in the gap, the poses flagged incomplete exactly there, the
+    poses before the gap those of the run without it, and this module's angle error equal to
+    mocapctl's own."""
+    out, keep = tmp_path / "report.md", tmp_path / "keep"
+    assert de.main(["--procedural", "--clips", "1", "--clip-seconds", "10", "--seconds", "2",
+                    "--segments", "right_wrist", "--out", str(out), "--keep", str(keep)]) == 0
+    text = out.read_text()
+    assert "python3 -m training missing-sensor --procedural --clips 1 --clip-seconds 10 --seconds 2" in text
+    assert re.search(r"^\| none \| [\d.]+ \|", text, re.M), text
+    row = re.search(r"^\| right_wrist \| ([\d.]+) \| .*\| (\d+) \(elsewhere (\d+)\) \| ([\d.]+|never) / ", text, re.M)
+    assert row, text
+    assert int(row.group(2)) == 0                       # nothing exploded
+    assert re.search(r"^\| right_wrist \| 120 of 120 \| 0 \| 0\.000 \|", text, re.M), text
+
+    clip_dir = next(keep.iterdir())
+    silent = next(clip_dir.glob("*-right_wrist.cap"))
+    gap = de.gap_window(de.procedural_clips(1, 10.0, 0)[0], 2.0)
+    assert (gap.gap_start, gap.gap_end) == (5.0, 7.0)   # 1 s lead-in + (10 - 2) / 2
+    truth = np.load(silent.with_suffix(".truth.npz"))
+    assert list(truth["silences"]) == ["right_wrist@5.0+2.0"]
+    t0 = float(truth["t_session_start"])
+
+    # The sensor frames (no model): the right wrist held exactly in the gap, nobody else.
+    frames_csv = tmp_path / "frames.csv"
+    r = subprocess.run([str(ort.mocapctl_path(require_onnx=False)), "replay", str(silent), "--csv",
+                        str(frames_csv)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    header = frames_csv.read_text().splitlines()[0].split(",")
+    a = np.loadtxt(frames_csv, delimiter=",", skiprows=1)
+    t = a[:, header.index("time_s")] - t0
+    held = {seg: (a[:, header.index(f"{seg}_flags")].astype(int) & 2) != 0
+            for seg in ("pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head")}
+    near = (t > gap.gap_start - 1.0) & (t < gap.gap_end + 1.0)
+    in_gap = (t > gap.gap_start - 1e-6) & (t < gap.gap_end - 1e-6)
+    np.testing.assert_array_equal(held["right_wrist"][near], in_gap[near])
+    assert held["right_wrist"][near].sum() == 120
+    for seg, h in held.items():
+        if seg != "right_wrist":
+            assert not h[near].any(), seg
+
+    # The poses through the model: incomplete exactly in the gap (and where the run without
+    # the silence has them too: the capture's end).
+    def incomplete_times(cond):
+        time_s, flags, _, _ = de.read_pose_csv(next(clip_dir.glob(f"*-{cond}.poses.csv")))
+        return set(np.round(time_s[(flags & de.POSE_INCOMPLETE) != 0] - t0, 4))
+    extra = incomplete_times("right_wrist") - incomplete_times("none")
+    assert len(extra) == 120 and min(extra) >= gap.gap_start - 1e-6 and max(extra) < gap.gap_end
+
+    # This module's figures are mocapctl's: the whole replay's mean angle error agrees.
+    for cond in ("none", "right_wrist"):
+        stem = next(clip_dir.glob(f"*-{cond}.cap")).with_suffix("")
+        run = de.align_to_truth(*de.read_pose_csv(stem.with_suffix(".poses.csv")),
+                                np.load(stem.with_suffix(".truth.npz")),
+                                json.loads(stem.with_suffix(".metrics.json").read_text()))
+        err = de.frame_errors(run)
+        assert np.nanmean(err.angle) == pytest.approx(run.metrics["angle_error_deg"], abs=0.01)
+        assert len(run.t) == run.metrics["poses"]
