@@ -1052,6 +1052,8 @@ def _same(key: str, a, b) -> bool:
 def _contradiction(key: str, new, old, path) -> str:
     if key == "anchored":
         new, old = ("anchored" if new else "not anchored (--no-anchor)"), ("anchored" if old else "not anchored")
+    if key in ("sensors", "optional", "dropout_seconds"):   # as typed: a,b,c
+        new, old = (",".join(map(str, v)) or "none" for v in (new, old))
     what = "network" if key in ARCHITECTURE else "training options"
     return (f"--resume: {_option(key)} {new} contradicts {path} ({old}); a resumed run keeps its "
             f"{what} (only --budget-minutes, --steps, --stop-after, --device, --ckpt-dir, --results-dir may "
