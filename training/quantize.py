@@ -234,9 +234,28 @@ def load_onnx(path):
 
 
 # ------------------------------------------------------------------------------ check
-def fixture_inputs(seconds: float = 3.0, seed: int = 0) -> tuple:
+def fixture_inputs(seconds: float = 3.0, seed: int = 0, sensors=None) -> tuple:
     from .export import fixture_inputs as export_fixture
-    return export_fixture(seconds=seconds, seed=seed)
+    if sensors is None:
+        return export_fixture(seconds=seconds, seed=seed)
+    return export_fixture(seconds=seconds, seed=seed, sensors=tuple(sensors))
+
+
+def _sensor_names(info: dict) -> list:
+    order = info["sensor_order"]
+    return [n.strip() for n in order.split(",")] if isinstance(order, str) else list(order)
+
+
+def _check_mask(info: dict, ori) -> "np.ndarray | None":
+    """For a model with imu_mask: every sensor present in the first character; the others lack
+    the model's optional sensors (inputs zero, as the engine feeds a missing one)."""
+    if not info.get("imu_mask"):
+        return None
+    mask = np.ones(ori.shape[:3], np.float32)
+    optional = [k for k, name in enumerate(_sensor_names(info)) if name in info.get("optional", ())]
+    for k in optional:
+        mask[1:, :, k] = 0.0
+    return mask
 
 
 def check_against_fp32(fp32_path, int8_path, ori=None, acc=None, stream_frames: int = 60) -> dict:
@@ -245,12 +264,19 @@ def check_against_fp32(fp32_path, int8_path, ori=None, acc=None, stream_frames: 
     ("stream"; fp32 streamed equals fp32 whole to float rounding, training/README.md)."""
     from . import ort
     from .export import OUTPUT_NAMES
+    info = ort.model_info(fp32_path)
     if ori is None:
-        ori, acc = fixture_inputs()
+        ori, acc = fixture_inputs(sensors=_sensor_names(info))
+    mask = _check_mask(info, ori)
+    if mask is not None:
+        ori = np.where(mask[..., None, None] > 0, ori, 0.0).astype(np.float32)
+        acc = np.where(mask[..., None] > 0, acc, 0.0).astype(np.float32)
     n = min(stream_frames, ori.shape[1])
-    pairs = {"whole": (ort.run_onnx(fp32_path, ori, acc), ort.run_onnx(int8_path, ori, acc)),
-             "stream": (ort.run_onnx(fp32_path, ori[:, :n], acc[:, :n]),
-                        ort.run_onnx(int8_path, ori[:, :n], acc[:, :n], stream=True))}
+    m = None if mask is None else mask[:, :n]
+    pairs = {"whole": (ort.run_onnx(fp32_path, ori, acc, mask=mask),
+                       ort.run_onnx(int8_path, ori, acc, mask=mask)),
+             "stream": (ort.run_onnx(fp32_path, ori[:, :n], acc[:, :n], mask=m),
+                        ort.run_onnx(int8_path, ori[:, :n], acc[:, :n], stream=True, mask=m))}
     return {tag: {k: float(np.max(np.abs(q[k] - ref[k]))) for k in OUTPUT_NAMES}
             for tag, (ref, q) in pairs.items()}
 

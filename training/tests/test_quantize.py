@@ -216,3 +216,22 @@ def test_a_wrong_int8_model_fails_the_check_and_is_not_installed(tmp_path, monke
     with pytest.raises(qz.QuantizeCheckError, match="joint_rotations differ"):
         qz.quantize_file(SHIPPED_FP32, out, check=True)
     assert out.read_bytes() == b"previous" and sorted(p.name for p in tmp_path.iterdir()) == ["int8.onnx"]
+
+
+@needs_ort
+def test_a_contract_two_model_with_an_optional_chest_quantises_and_checks(tmp_path):
+    """The check feeds the model's own sensors and, for a masked model, a mask that leaves its
+    optional chest out: a seven-sensor contract-2 network quantises like the six-sensor one."""
+    from training import sensors as se
+    from training.model import ModelConfig
+    config = ModelConfig(48, 48, 2, 48, sensors=se.DEFAULT_SENSORS + ("chest",), optional=("chest",),
+                         masked=True)
+    fp32 = tmp_path / "seven_fp32.onnx"
+    net = MirrorEnsemble(export.untrained_model(seed=5, config=config)).eval()
+    export.export_fp32(net, fp32, "seven-sensor test network")
+    info = ort.model_info(fp32)
+    assert info["contract_version"] in (2, "2") and info["imu_mask"]
+    out = tmp_path / "seven_int8.onnx"
+    result = qz.quantize_file(fp32, out, check=True)
+    assert qz.check_failures(result["check"]) == [] and out.is_file()
+    assert ort.model_info(out)["sensor_count"] in (7, "7")
