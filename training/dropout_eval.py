@@ -24,7 +24,10 @@ Per condition (frames of all clips; windows in motion time):
              than FREEZE_RATIO of the truth's speed while the truth moves (speeds averaged over
              SMOOTH_S); for the bone also in the "none" run
   explode    frames with a NaN, a joint angle error over EXPLODE_ANGLE_DEG or a root step over
-             EXPLODE_ROOT_STEP_M in one frame, in the gap and the window after it
+             EXPLODE_ROOT_STEP_M in one frame, in the gap and the window after it; also those
+             that do not explode in the "none" run (a hard clip's error can pass 90 deg with every
+             sensor), by cause: the pelvis's global rotation (a wrong heading), another joint,
+             the root step, a NaN
   recovery   seconds from the gap's end until the angle and position errors (averaged over
              SMOOTH_S, frames after the gap only) are within RECOVERED_WITHIN of the "none" run's
              (plus a small absolute slack) and stay there for RECOVERY_HOLD_S; "never" when they
@@ -65,6 +68,9 @@ LEAD_IN_S = 1.0              # synth_capture's blend from the T-pose into the cl
 MIN_CLIP_S = 20.0            # clips shorter than this are not used from a split or folder
 CLIP_S = 25.0                # longer ones are cut to this
 RECOVERY_WINDOW_S = 2.0
+# Gap edges are put on multiples of this: a tick of both the sensors' 100 Hz and the poses'
+# 60 Hz, so that the first and last pose of a gap are those of its first and last silent sample.
+GRID_S = 0.05
 SMOOTH_S = 0.5               # averaging of speeds and errors before thresholds are applied
 RECOVERED_WITHIN = 0.20      # recovered: error <= (1 + this) x the "none" run's ...
 RECOVERY_SLACK_DEG = 0.5     # ... + this much, so that a near-zero reference is not all noise
@@ -123,17 +129,27 @@ def longest_freeze(pred_speed, true_speed, fps: float, moving: float, window=Non
     return longest_run(frozen) / fps
 
 
-def exploded_frames(angle_err, pred_root, finite) -> np.ndarray:
-    """Frames with a non-finite pose, a joint angle error over EXPLODE_ANGLE_DEG (angle_err: (T,J)
-    deg, NaN counts) or a root step over EXPLODE_ROOT_STEP_M from the frame before."""
+EXPLODE_CAUSES = ("pelvis", "joint", "root", "nan")
+
+
+def explosion_causes(angle_err, pred_root, finite) -> dict:
+    """Per frame, each cause of an explosion: "pelvis" (joint 0's global angle error, angle_err
+    (T,J) deg, over EXPLODE_ANGLE_DEG), "joint" (another joint's), "root" (a root step over
+    EXPLODE_ROOT_STEP_M from the frame before), "nan" (a non-finite pose or angle)."""
     angle_err = np.asarray(angle_err, np.float64)
-    bad = ~np.asarray(finite, bool)
-    bad |= np.any(~(angle_err <= EXPLODE_ANGLE_DEG), axis=-1)
+    nan = ~np.asarray(finite, bool) | np.any(np.isnan(angle_err), axis=-1)
     root = np.asarray(pred_root, np.float64)
     step = np.zeros(len(root))
     step[1:] = np.linalg.norm(np.diff(root, axis=0), axis=-1)
-    bad |= ~(step <= EXPLODE_ROOT_STEP_M)
-    return bad
+    return {"pelvis": angle_err[:, 0] > EXPLODE_ANGLE_DEG,
+            "joint": np.any(angle_err[:, 1:] > EXPLODE_ANGLE_DEG, axis=-1),
+            "root": ~(step <= EXPLODE_ROOT_STEP_M), "nan": nan}
+
+
+def exploded_frames(angle_err, pred_root, finite) -> np.ndarray:
+    """Frames with any of explosion_causes."""
+    causes = explosion_causes(angle_err, pred_root, finite)
+    return np.logical_or.reduce([causes[c] for c in EXPLODE_CAUSES])
 
 
 def recovery_time(t, errors, references, slacks, gap_end: float, fps: float) -> float:
@@ -285,7 +301,8 @@ class Windows:
         t = np.asarray(t) + 1e-9
         gap = (t >= self.gap_start) & (t < self.gap_end)
         after = (t >= self.gap_end) & (t < self.gap_end + RECOVERY_WINDOW_S)
-        return {"gap": gap, "after": after, "elsewhere": ~(gap | after)}
+        return {"gap": gap, "after": after, "elsewhere": ~(gap | after),
+                "before": t < self.gap_start}
 
 
 @dataclass
@@ -303,6 +320,9 @@ class ConditionScore:
     freeze_bone_ref: float = math.nan
     explode: int = 0             # frames, gap + after
     explode_elsewhere: int = 0
+    explode_extra: int = 0       # gap + after, not exploding in the "none" run
+    explode_extra_causes: dict = field(default_factory=dict)   # cause -> frames of explode_extra
+    explode_extra_joints: dict = field(default_factory=dict)   # joint -> new frames over the angle
     recovery: float = math.nan   # s (inf: never)
     incomplete_in_gap: int = 0
     incomplete_extra: int = 0    # flagged outside the gap beyond the "none" run
@@ -316,13 +336,15 @@ def score_condition(clip: str, condition: str, run: Run, err: FrameErrors, windo
     """The scores of one run; ref = (Run, FrameErrors) of the clip's "none" run (same frames)."""
     m = windows.masks(run.t)
     per_frame_angle = np.nanmean(err.angle, axis=-1) if len(err.angle) else np.zeros(0)
-    s = ConditionScore(clip, condition, {k: int(v.sum()) for k, v in m.items()},
-                       {k: float(np.nansum(per_frame_angle[v])) for k, v in m.items()},
-                       {k: float(np.nansum(err.pos_cm[v])) for k, v in m.items()}, metrics=run.metrics)
+    windows3 = ("gap", "after", "elsewhere")
+    s = ConditionScore(clip, condition, {k: int(m[k].sum()) for k in windows3},
+                       {k: float(np.nansum(per_frame_angle[m[k]])) for k in windows3},
+                       {k: float(np.nansum(err.pos_cm[m[k]])) for k in windows3}, metrics=run.metrics)
     s.angle_all = float(np.nanmean(per_frame_angle)) if len(per_frame_angle) else math.nan
     around = m["gap"] | m["after"]
     s.freeze_body = longest_freeze(err.body_speed, err.true_body_speed, run.fps, BODY_MOVING_M_S, around)
-    exploded = exploded_frames(err.angle, run.pred_root, run.finite)
+    causes = explosion_causes(err.angle, run.pred_root, run.finite)
+    exploded = np.logical_or.reduce([causes[c] for c in EXPLODE_CAUSES])
     s.explode, s.explode_elsewhere = int(exploded[around].sum()), int(exploded[m["elsewhere"]].sum())
     incomplete = (run.flags & POSE_INCOMPLETE) != 0
     s.incomplete_in_gap = int(incomplete[m["gap"]].sum())
@@ -338,9 +360,14 @@ def score_condition(clip: str, condition: str, run: Run, err: FrameErrors, windo
         if len(ref_run.t) != len(run.t) or not np.allclose(ref_run.t, run.t):
             raise CommandError(f"{clip}: the {condition} replay has other frames than the one "
                                f"without a gap ({len(run.t)} against {len(ref_run.t)} poses)")
+        extra = exploded & around & ~exploded_frames(ref_err.angle, ref_run.pred_root, ref_run.finite)
+        s.explode_extra = int(extra.sum())
+        s.explode_extra_causes = {c: int((causes[c] & extra).sum()) for c in EXPLODE_CAUSES}
+        over = (err.angle > EXPLODE_ANGLE_DEG) & extra[:, None]
+        s.explode_extra_joints = {int(j): int(over[:, j].sum()) for j in np.nonzero(over.any(0))[0]}
         ref_incomplete = (ref_run.flags & POSE_INCOMPLETE) != 0
         s.incomplete_extra = int((incomplete & ~ref_incomplete & ~m["gap"]).sum())
-        before = run.t < windows.gap_start
+        before = m["before"]
         if before.any():
             s.same_before_gap = float(np.nanmax(np.abs(err.angle[before] - ref_err.angle[before])))
         ref_angle = np.nanmean(ref_err.angle, axis=-1)
@@ -358,14 +385,19 @@ def score_condition(clip: str, condition: str, run: Run, err: FrameErrors, windo
 
 
 # ------------------------------------------------------------------------------ one clip
+def on_grid(seconds: float) -> float:
+    return round(seconds / GRID_S) * GRID_S
+
+
 def gap_window(motion: sk.Motion, gap_s: float, lead_in: float = LEAD_IN_S) -> Windows:
-    """The gap in the middle of the clip itself (motion time: the lead-in comes first)."""
+    """The gap in the middle of the clip itself (motion time: the lead-in comes first), its
+    edges on GRID_S."""
     clip_s = motion.num_frames / motion.fps
     if clip_s < gap_s + 2 * RECOVERY_WINDOW_S:
         raise UsageError(f"{motion.name}: {clip_s:.1f} s is too short for a {gap_s:g} s gap with "
                          f"{RECOVERY_WINDOW_S:g} s on either side")
-    start = lead_in + (clip_s - gap_s) / 2.0
-    return Windows(start, start + gap_s)
+    start = on_grid(lead_in + (clip_s - gap_s) / 2.0)
+    return Windows(start, start + max(GRID_S, on_grid(gap_s)))
 
 
 def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Path, seed: int,
@@ -380,7 +412,8 @@ def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Pat
     for condition in (NONE, *segments):
         stem = f"{motion.name}-{condition}"
         cap = workdir / f"{stem}.cap"
-        silences = () if condition == NONE else (Silence(condition, windows.gap_start, gap_s),)
+        silences = () if condition == NONE else (
+            Silence(condition, windows.gap_start, windows.gap_end - windows.gap_start),)
         synth_capture(None, cap, motion=motion, seed=seed, world=world, lead_in=LEAD_IN_S,
                       silences=silences)
         truth = load_truth(cap.with_suffix(".truth.npz"))
@@ -431,6 +464,19 @@ def _fmt(v, digits=2) -> str:
     return f"{v:.{digits}f}"
 
 
+def _sum_counts(counts) -> dict:
+    total = {}
+    for c in counts:
+        for k, v in c.items():
+            total[k] = total.get(k, 0) + v
+    return total
+
+
+def _top_joints(counts: dict, n: int = 3) -> str:
+    top = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))[:n]
+    return ", ".join(f"{sk.JOINT_NAMES[j]} {v}" for j, v in top) or "-"
+
+
 def summarize(scores) -> dict:
     """Condition -> the figures of the table, over all clips."""
     out = {}
@@ -450,6 +496,15 @@ def summarize(scores) -> dict:
             "freeze_bone_ref": max(r.freeze_bone_ref for r in rows) if cond != NONE else math.nan,
             "explode": sum(r.explode for r in rows),
             "explode_elsewhere": sum(r.explode_elsewhere for r in rows),
+            "explode_extra": sum(r.explode_extra for r in rows),
+            **{f"explode_extra_{c}": sum(r.explode_extra_causes.get(c, 0) for r in rows)
+               for c in EXPLODE_CAUSES},
+            "explode_extra_clips": sum(1 for r in rows if r.explode_extra),
+            "explode_extra_joints": _sum_counts(r.explode_extra_joints for r in rows),
+            "drift_5s": float(np.mean([(r.metrics.get("root_drift_m") or {}).get("5s") or math.nan
+                                       for r in rows])),
+            "drift_10s": float(np.mean([(r.metrics.get("root_drift_m") or {}).get("10s") or math.nan
+                                        for r in rows])),
             "recovery_median": float(np.median(finite_rec)) if finite_rec else (math.inf if rec else math.nan),
             "recovery_max": (max(rec) if rec else math.nan),
             "never_recovered": sum(1 for v in rec if math.isinf(v)),
@@ -461,6 +516,54 @@ def summarize(scores) -> dict:
             "engine_angle": float(np.mean([r.metrics.get("angle_error_deg") or math.nan for r in rows])),
             "module_angle": float(np.mean([r.angle_all for r in rows])),
         }
+    return out
+
+
+def findings(summary) -> list:
+    """The table's answers to the questions asked of it, in words (computed, not written by
+    hand, so that a rerun keeps them true)."""
+    ref = summary[NONE]
+    conds = [c for c in summary if c != NONE]
+    by_gap = sorted(conds, key=lambda c: summary[c]["angle_gap"], reverse=True)
+    worst, others = by_gap[0], by_gap[1:]
+    v = summary[worst]
+    out = ["## What it shows", "",
+           f"- **Error while missing**: without the {worst} sensor the gap's error is "
+           f"{_fmt(v['angle_gap'])} deg / {_fmt(v['pos_gap'])} cm against {_fmt(ref['angle_gap'])} / "
+           f"{_fmt(ref['pos_gap'])} with every sensor"
+           + (f"; without another sensor {_fmt(min(summary[c]['angle_gap'] for c in others))} - "
+              f"{_fmt(max(summary[c]['angle_gap'] for c in others))} deg / "
+              f"{_fmt(min(summary[c]['pos_gap'] for c in others))} - "
+              f"{_fmt(max(summary[c]['pos_gap'] for c in others))} cm" if others else "")
+           + ". The bone the missing sensor reports is off by "
+           + ", ".join(f"{c} {_fmt(summary[c]['bone'], 0)}" for c in conds)
+           + " deg (mean over the gap; "
+           + f"{_fmt(min(summary[c]['bone_ref'] for c in conds), 0)} - "
+             f"{_fmt(max(summary[c]['bone_ref'] for c in conds), 0)} with every sensor)."]
+    body = max(summary[c]["freeze_body"] for c in conds)
+    bone_c = max(conds, key=lambda c: summary[c]["freeze_bone"])
+    out.append(f"- **Freeze**: the body as a whole " + ("never froze" if body == 0 else
+               f"froze for {_fmt(body, 1)} s at most") + f"; the missing sensor's own bone stopped "
+               f"while the truth moved for up to {_fmt(summary[bone_c]['freeze_bone'], 1)} s "
+               f"({bone_c}), and for at most "
+               f"{_fmt(max(summary[c]['freeze_bone_ref'] for c in conds), 1)} s with every sensor.")
+    new = {cause: sum(summary[c][f"explode_extra_{cause}"] for c in conds) for cause in EXPLODE_CAUSES}
+    out.append(f"- **Explode**: {new['nan']} NaN poses and {new['root']} new root steps over "
+               f"{EXPLODE_ROOT_STEP_M:g} m; new frames with an error over {EXPLODE_ANGLE_DEG:g} deg: "
+               + ", ".join(f"{c} {summary[c]['explode_extra']} "
+                           f"({_top_joints(summary[c]['explode_extra_joints'], 2)})" for c in conds)
+               + f" (of the pelvis's, {summary.get('pelvis', {}).get('explode_extra_pelvis', 0)} are "
+               f"its global rotation: a heading left behind).")
+    never = sum(summary[c]["never_recovered"] for c in conds)
+    slow_c = max(conds, key=lambda c: summary[c]["recovery_max"])
+    out.append(f"- **Recovery**: " + ("every condition of every clip recovered" if never == 0 else
+               f"{never} condition runs never recovered") + f"; the median time is "
+               + ", ".join(f"{c} {_fmt(summary[c]['recovery_median'])}" for c in conds)
+               + f" s, the slowest {_fmt(summary[slow_c]['recovery_max'])} s ({slow_c}). In the "
+               f"{RECOVERY_WINDOW_S:g} s after the gap the error is "
+               f"{_fmt(min(summary[c]['angle_after'] for c in conds))} - "
+               f"{_fmt(max(summary[c]['angle_after'] for c in conds))} deg against "
+               f"{_fmt(ref['angle_after'])} with every sensor.")
     return out
 
 
@@ -481,13 +584,14 @@ def write_report(path: Path, scores, meta: dict) -> Path:
              f"of `training/dropout_eval.py` defines each column.", "",
              "| missing | angle gap | angle after | angle elsewhere | pos gap | pos after | pos elsewhere "
              "| its bone in the gap, deg (all sensors) | longest freeze s: body / its bone (all sensors) "
-             "| exploding frames | recovery s: median / worst (never) |",
+             "| exploding frames, new (clips) | recovery s: median / worst (never) |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for cond, v in summary.items():
         if cond == NONE:
-            bone = freeze = rec = "-"
+            bone = rec = new = "-"
             freeze = f"{_fmt(v['freeze_body'], 1)} / -"
         else:
+            new = f"{v['explode_extra']} ({v['explode_extra_clips']})"
             bone = f"{_fmt(v['bone'], 1)} ({_fmt(v['bone_ref'], 1)})"
             freeze = (f"{_fmt(v['freeze_body'], 1)} / {_fmt(v['freeze_bone'], 1)} "
                       f"({_fmt(v['freeze_bone_ref'], 1)})")
@@ -495,21 +599,37 @@ def write_report(path: Path, scores, meta: dict) -> Path:
                    f"({v['never_recovered']})")
         lines.append(f"| {cond} | {_fmt(v['angle_gap'])} | {_fmt(v['angle_after'])} | "
                      f"{_fmt(v['angle_elsewhere'])} | {_fmt(v['pos_gap'])} | {_fmt(v['pos_after'])} | "
-                     f"{_fmt(v['pos_elsewhere'])} | {bone} | {freeze} | {v['explode']} "
-                     f"(elsewhere {v['explode_elsewhere']}) | {rec} |")
+                     f"{_fmt(v['pos_elsewhere'])} | {bone} | {freeze} | {new} | {rec} |")
+    lines += ["", f"Exploding frames in the gap and the {RECOVERY_WINDOW_S:g} s after it (all clips): "
+              f"every one, those that do not explode in the run with every sensor (*new*), and the "
+              f"causes of the new ones (a frame can have several); *elsewhere*: the other frames.", "",
+              "| missing | exploding | new | pelvis global > 90 deg | another joint > 90 deg "
+              "| root step > 0.5 m | NaN | joints most often over 90 deg in new frames | elsewhere |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for cond, v in summary.items():
+        new = "-" if cond == NONE else v["explode_extra"]
+        why = (["-"] * 4 if cond == NONE else [str(v[f"explode_extra_{c}"]) for c in EXPLODE_CAUSES])
+        joints = "-" if cond == NONE else _top_joints(v["explode_extra_joints"])
+        lines.append(f"| {cond} | {v['explode']} | {new} | " + " | ".join(why) +
+                     f" | {joints} | {v['explode_elsewhere']} |")
     lines += ["", "Checks that the silence is where it was put and changes nothing else: poses "
               "flagged incomplete (a model sensor held or silent) in the gap, and outside it beyond "
               "the run with every sensor; the largest joint angle difference to that run before the "
               "gap (the same bytes, so 0 unless the replay is not deterministic); mocapctl's own "
-              "angle error of the whole replay (`--metrics-json`) beside this module's.", "",
+              "angle error of the whole replay (`--metrics-json`) beside this module's, and its "
+              "root drift (drift-corrected pose root, windows over the whole replay).", "",
               "| missing | incomplete in the gap | incomplete elsewhere, extra | before the gap, deg "
-              "| angle deg, all frames: mocapctl / this module (clip means) |", "|---|---|---|---|---|"]
+              "| angle deg, all frames: mocapctl / this module (clip means) | root drift 5 s / 10 s, m |",
+              "|---|---|---|---|---|---|"]
     for cond, v in summary.items():
         lines.append(f"| {cond} | {v['incomplete_in_gap']} of {v['gap_frames']} | "
                      f"{v['incomplete_extra'] if cond != NONE else '-'} | "
                      f"{_fmt(v['same_before_gap'], 3) if cond != NONE else '-'} | "
-                     f"{_fmt(v['engine_angle'])} / {_fmt(v['module_angle'])} |")
+                     f"{_fmt(v['engine_angle'])} / {_fmt(v['module_angle'])} | "
+                     f"{_fmt(v['drift_5s'], 3)} / {_fmt(v['drift_10s'], 3)} |")
     conds = [c for c in summary if c != NONE]
+    if conds and NONE in summary:
+        lines += [""] + findings(summary)
     clips = list(dict.fromkeys(s.clip for s in scores))
     by = {(s.clip, s.condition): s for s in scores}
     lines += ["", "## Per clip: recovery time, s (angle error in the gap - the same frames with "
@@ -529,15 +649,16 @@ def write_report(path: Path, scores, meta: dict) -> Path:
               f"- gap: [{meta['gap_s']:g} s window centred on the clip], after: the "
               f"{RECOVERY_WINDOW_S:g} s after it, elsewhere: every other replayed frame.",
               f"- its bone: the global orientation error of the bone the silent sensor reports "
-              f"(pelvis, hands, knees' shins, head), mean over the gap; in brackets the same bone "
+              f"(pelvis, hands, shins, head), mean over the gap; in brackets the same bone "
               f"and frames with every sensor.",
               f"- freeze: the longest stretch, in the gap and the window after it, in which the pose "
               f"moves at less than {FREEZE_RATIO:g} x the truth's speed while the truth moves (body: "
               f"mean root-aligned joint speed >= {BODY_MOVING_M_S:g} m/s; bone: angular speed >= "
               f"{BONE_MOVING_DEG_S:g} deg/s); speeds averaged over {SMOOTH_S:g} s. Worst clip.",
-              f"- exploding frames: a NaN, a joint angle error > {EXPLODE_ANGLE_DEG:g} deg or a root "
-              f"step > {EXPLODE_ROOT_STEP_M:g} m in one frame, in the gap and the window after it "
-              f"(elsewhere: in the other frames), summed over clips.",
+              f"- exploding frames: a NaN, a joint angle error > {EXPLODE_ANGLE_DEG:g} deg (joint 0: "
+              f"the pelvis's global rotation) or a root step > {EXPLODE_ROOT_STEP_M:g} m in one frame, "
+              f"in the gap and the window after it, summed over clips; new: not exploding in the "
+              f"run with every sensor (clips: how many clips have any).",
               f"- recovery: from the gap's end until the angle and position errors (averaged over "
               f"{SMOOTH_S:g} s, frames after the gap only) are within {RECOVERED_WITHIN:.0%} (+ "
               f"{RECOVERY_SLACK_DEG:g} deg, {RECOVERY_SLACK_CM:g} cm) of the run with every sensor "
@@ -680,8 +801,8 @@ def main(args=None) -> int:
     for cond, v in summarize(scores).items():
         print(f"{cond:12s} angle gap/after/elsewhere {_fmt(v['angle_gap'])} / {_fmt(v['angle_after'])} / "
               f"{_fmt(v['angle_elsewhere'])} deg  pos {_fmt(v['pos_gap'])} / {_fmt(v['pos_after'])} / "
-              f"{_fmt(v['pos_elsewhere'])} cm  freeze {_fmt(v['freeze_body'], 1)} s  explode "
-              f"{v['explode']}  recovery median {_fmt(v['recovery_median'])} s worst "
+              f"{_fmt(v['pos_elsewhere'])} cm  freeze {_fmt(v['freeze_body'], 1)} s  exploding "
+              f"{v['explode']} (new {v['explode_extra'] if cond != NONE else '-'})  recovery median {_fmt(v['recovery_median'])} s worst "
               f"{_fmt(v['recovery_max'])} s")
     print(f"missing-sensor: wrote {_shown(path)}")
     return 0

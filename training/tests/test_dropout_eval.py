@@ -55,8 +55,13 @@ def test_exploding_frames_are_nan_huge_joint_errors_and_root_jumps():
     finite[30] = False                        # a NaN pose
     root[40:, 0] += 0.6                       # the root jumps 0.6 m between frames 39 and 40
     assert set(np.nonzero(de.exploded_frames(angle, root, finite))[0]) == {7, 20, 30, 40}
+    causes = de.explosion_causes(angle, root, finite)
+    assert {c: list(np.nonzero(v)[0]) for c, v in causes.items()} == \
+        {"pelvis": [], "joint": [7], "root": [40], "nan": [20, 30]}
+    angle[12, 0] = 120.0                      # the pelvis facing the wrong way
+    assert list(np.nonzero(de.explosion_causes(angle, root, finite)["pelvis"])[0]) == [12]
     root[40:, 0] -= 0.2                       # 0.4 m: a fast step, not an explosion
-    assert set(np.nonzero(de.exploded_frames(angle, root, finite))[0]) == {7, 20, 30}
+    assert set(np.nonzero(de.exploded_frames(angle, root, finite))[0]) == {7, 12, 20, 30}
 
 
 def test_recovery_time_is_when_the_error_is_back_near_the_reference_and_stays():
@@ -116,9 +121,14 @@ def test_the_scores_catch_a_frozen_an_exploding_and_a_never_recovering_pose():
     exploding = motion.local_rot.astype(np.float64).copy()
     exploding[gap, 18] = exploding[gap, 18] @ sk.rot_axis("z", np.pi)[None]   # elbow turned 180 deg
     root = motion.root_pos.astype(np.float64).copy()
-    root[np.argmax(gap) + 30:] += 1.0                                         # and a 1 m jump
+    after_gap = int(np.nonzero(gap)[0][-1]) + 30
+    root[after_gap:] += 1.0                                                   # and a 1 m jump after it
     s = _score(motion, _run(motion, exploding, root), ref, windows)
-    assert s.explode == int(gap.sum()) and s.explode_elsewhere == 0
+    assert s.explode == s.explode_extra == int(gap.sum()) + 1 and s.explode_elsewhere == 0
+    assert s.explode_extra_causes == {"pelvis": 0, "joint": int(gap.sum()), "root": 1, "nan": 0}
+    # Frames that explode with every sensor too are not new.
+    s = _score(motion, _run(motion, exploding, root), _run(motion, exploding), windows)
+    assert s.explode == int(gap.sum()) + 1 and s.explode_extra == 1
 
     drifting = motion.local_rot.astype(np.float64).copy()
     drifting[t >= 5.0, 13] = drifting[t >= 5.0, 13] @ sk.rot_axis("x", np.radians(60.0))[None]
@@ -159,6 +169,17 @@ def test_clips_are_chosen_evenly_among_the_long_enough_and_cut():
         de.gap_window(motions[0], 5.0)
     w = de.gap_window(chosen[2], 5.0)
     assert (w.gap_start, w.gap_end) == (1.0 + 10.0, 1.0 + 15.0)
+    # A clip of 21.4667 s: the middle would start at 9.2333 s, between two sensor samples; the
+    # gap starts on a tick of both the sensors (100 Hz) and the poses (60 Hz).
+    odd = procedural.make_motion("walk", 1288 / 60.0, seed=1)
+    w = de.gap_window(odd, 5.0)
+    assert w.gap_start == pytest.approx(9.25) and w.gap_end == pytest.approx(14.25)
+    # A frame on an edge belongs to the later window, whatever the last bit of either number.
+    w = de.Windows(de.on_grid(9.95), de.on_grid(9.95) + 5.0)
+    assert w.gap_start > 597 / 60.0                      # 9.950000000000001 against 9.95
+    m = w.masks(np.arange(1200) / 60.0)
+    assert np.nonzero(m["gap"])[0][[0, -1]].tolist() == [597, 896]
+    assert not m["before"][597] and m["before"][596] and m["after"][897]
 
 
 def test_bad_options_are_usage_errors(tmp_path):
@@ -187,9 +208,9 @@ def test_a_short_run_through_mocapctl_has_the_gap_where_it_was_put(tmp_path):
     text = out.read_text()
     assert "python3 -m training missing-sensor --procedural --clips 1 --clip-seconds 10 --seconds 2" in text
     assert re.search(r"^\| none \| [\d.]+ \|", text, re.M), text
-    row = re.search(r"^\| right_wrist \| ([\d.]+) \| .*\| (\d+) \(elsewhere (\d+)\) \| ([\d.]+|never) / ", text, re.M)
+    row = re.search(r"^\| right_wrist \| ([\d.]+) \| .*\| (\d+) \((\d+)\) \| ([\d.]+|never) / ", text, re.M)
     assert row, text
-    assert int(row.group(2)) == 0                       # nothing exploded
+    assert int(row.group(2)) == 0 and row.group(4) != "never"   # nothing exploded; it recovered
     assert re.search(r"^\| right_wrist \| 120 of 120 \| 0 \| 0\.000 \|", text, re.M), text
 
     clip_dir = next(keep.iterdir())
