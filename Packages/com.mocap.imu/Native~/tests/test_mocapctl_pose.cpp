@@ -267,58 +267,6 @@ TEST(MocapctlSensors, SensorsTheModelDoesNotRequireBecomeOptional)
 
 namespace {
 
-// A tensor bundle (cmd_infer.c's format) of float tensors, in order.
-struct BundleTensor {
-    std::string name;
-    std::vector<uint32_t> dims;
-    std::vector<float> data;
-};
-
-void put_u32(std::vector<uint8_t> &b, uint32_t v)
-{
-    for (int i = 0; i < 4; ++i) b.push_back((uint8_t)(v >> (8 * i)));
-}
-
-std::vector<uint8_t> bundle_bytes(const std::vector<BundleTensor> &tensors)
-{
-    std::vector<uint8_t> b = {'M', 'O', 'C', 'A', 'P', 'T', 'N', 'S'};
-    put_u32(b, 1);
-    put_u32(b, (uint32_t)tensors.size());
-    for (const BundleTensor &t : tensors) {
-        char n[32] = {0};
-        std::snprintf(n, sizeof n, "%s", t.name.c_str());
-        b.insert(b.end(), n, n + 32);
-        put_u32(b, (uint32_t)t.dims.size());
-        for (uint32_t d : t.dims) put_u32(b, d);
-        const uint8_t *p = reinterpret_cast<const uint8_t *>(t.data.data());
-        b.insert(b.end(), p, p + t.data.size() * 4); // little-endian host (x86, ARM)
-    }
-    return b;
-}
-
-// The named tensor of a bundle file (empty if absent).
-std::vector<float> bundle_tensor(const std::vector<uint8_t> &b, const std::string &want)
-{
-    auto u32 = [&](size_t at) {
-        return (uint32_t)b[at] | (uint32_t)b[at + 1] << 8 | (uint32_t)b[at + 2] << 16 | (uint32_t)b[at + 3] << 24;
-    };
-    if (b.size() < 16) return {};
-    size_t pos = 16;
-    for (uint32_t i = 0, count = u32(12); i < count; ++i) {
-        std::string name(reinterpret_cast<const char *>(&b[pos]));
-        uint32_t rank = u32(pos + 32);
-        size_t n = 1;
-        for (uint32_t d = 0; d < rank; ++d) n *= u32(pos + 36 + 4 * d);
-        pos += 36 + 4 * rank;
-        if (name == want) {
-            std::vector<float> out(n);
-            std::memcpy(out.data(), &b[pos], n * 4);
-            return out;
-        }
-        pos += n * 4;
-    }
-    return {};
-}
 
 }  // namespace
 
@@ -341,13 +289,13 @@ TEST(MocapctlInfer, AContractTwoModelTakesItsSensorsAndItsMask)
     mask[(size_t)1 * S + 6] = 0.0f; // the chest missing in frame 1
     mask[(size_t)2 * S + 3] = 0.0f; // the left shin in frame 2
     const std::string in = dir + "/in.tensors", out = dir + "/out.tensors";
-    write_file_bytes(in, bundle_bytes({{"imu_orientation", {1, N, S, 3, 3}, ori},
+    write_file_bytes(in, tensor_bundle_bytes({{"imu_orientation", {1, N, S, 3, 3}, ori},
                                        {"imu_acceleration", {1, N, S, 3}, acc},
                                        {"imu_mask", {1, N, S}, mask}}));
     const std::string infer = "infer --model " + dir + "/v2_chest.onnx --threads 1 --input ";
     Result r = mocapctl(infer + in + " --output " + out + " --stream");
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    std::vector<float> vel = bundle_tensor(read_file_bytes(out), "root_velocity");
+    std::vector<float> vel = tensor_bundle_get(read_file_bytes(out), "root_velocity");
     ASSERT_EQ(vel.size(), (size_t)N * 3);
     for (int t = 0; t < N; ++t) {
         float sum = 0;
@@ -358,24 +306,24 @@ TEST(MocapctlInfer, AContractTwoModelTakesItsSensorsAndItsMask)
     }
 
     // Without imu_mask every sensor counts as present.
-    write_file_bytes(in, bundle_bytes({{"imu_orientation", {1, N, S, 3, 3}, ori},
+    write_file_bytes(in, tensor_bundle_bytes({{"imu_orientation", {1, N, S, 3, 3}, ori},
                                        {"imu_acceleration", {1, N, S, 3}, acc}}));
     r = mocapctl(infer + in + " --output " + out);
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    vel = bundle_tensor(read_file_bytes(out), "root_velocity");
+    vel = tensor_bundle_get(read_file_bytes(out), "root_velocity");
     ASSERT_EQ(vel.size(), (size_t)N * 3);
     for (int t = 0; t < N; ++t) EXPECT_FLOAT_EQ(vel[t * 3 + 0], 7.0f) << "frame " << t;
 
     // Six sensors for a model of seven: refused with the shape it wants.
     std::vector<float> ori6((size_t)N * 6 * 9, 0.0f), acc6((size_t)N * 6 * 3, 0.0f);
-    write_file_bytes(in, bundle_bytes({{"imu_orientation", {1, N, 6, 3, 3}, ori6},
+    write_file_bytes(in, tensor_bundle_bytes({{"imu_orientation", {1, N, 6, 3, 3}, ori6},
                                        {"imu_acceleration", {1, N, 6, 3}, acc6}}));
     r = mocapctl(infer + in + " --output " + out);
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("[B, N, 7, 3, 3]"), std::string::npos) << r.output;
     // A mask for a contract-1 model: refused, naming it.
     std::vector<float> mask6((size_t)N * 6, 1.0f);
-    write_file_bytes(in, bundle_bytes({{"imu_orientation", {1, N, 6, 3, 3}, ori6},
+    write_file_bytes(in, tensor_bundle_bytes({{"imu_orientation", {1, N, 6, 3, 3}, ori6},
                                        {"imu_acceleration", {1, N, 6, 3}, acc6},
                                        {"imu_mask", {1, N, 6}, mask6}}));
     r = mocapctl("infer --model " + dir + "/valid.onnx --input " + in + " --output " + out);

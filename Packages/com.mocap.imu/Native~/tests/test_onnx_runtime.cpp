@@ -359,47 +359,6 @@ TEST(OnnxRuntime, RejectsBadStreamShapes)
 
 // mocapctl infer + model-info on the fixture, through tensor bundle files.
 namespace {
-void put_u32(std::vector<uint8_t> &b, uint32_t v)
-{
-    for (int i = 0; i < 4; ++i) b.push_back((uint8_t)(v >> (8 * i)));
-}
-void put_tensor(std::vector<uint8_t> &b, const char *name, std::vector<uint32_t> dims,
-                const std::vector<float> &data)
-{
-    char n[32] = {0};
-    std::snprintf(n, sizeof n, "%s", name);
-    b.insert(b.end(), n, n + 32);
-    put_u32(b, (uint32_t)dims.size());
-    for (uint32_t d : dims) put_u32(b, d);
-    const uint8_t *p = reinterpret_cast<const uint8_t *>(data.data());
-    b.insert(b.end(), p, p + data.size() * 4);  // little-endian host (x86, ARM)
-}
-// Returns the named tensor's data from a bundle file (empty if absent).
-std::vector<float> get_tensor(const std::vector<uint8_t> &b, const std::string &want)
-{
-    size_t pos = 8;
-    auto u32 = [&](size_t at) {
-        return (uint32_t)b[at] | (uint32_t)b[at + 1] << 8 | (uint32_t)b[at + 2] << 16 |
-               (uint32_t)b[at + 3] << 24;
-    };
-    if (b.size() < 16 || std::memcmp(b.data(), "MOCAPTNS", 8) != 0) return {};
-    uint32_t count = u32(12);
-    pos = 16;
-    for (uint32_t i = 0; i < count; ++i) {
-        std::string name(reinterpret_cast<const char *>(&b[pos]));
-        uint32_t rank = u32(pos + 32);
-        size_t n = 1;
-        for (uint32_t d = 0; d < rank; ++d) n *= u32(pos + 36 + 4 * d);
-        pos += 36 + 4 * rank;
-        if (name == want) {
-            std::vector<float> out(n);
-            std::memcpy(out.data(), &b[pos], n * 4);
-            return out;
-        }
-        pos += n * 4;
-    }
-    return {};
-}
 std::string run_capture(const std::string &cmd)
 {
     std::string out;
@@ -420,11 +379,8 @@ TEST(OnnxRuntime, MocapctlInferStreamMatchesWholeClip)
     const int B = 1, N = 7;
     std::vector<float> ori = random_floats((size_t)B * N * 54, 3, 1.0f);
     std::vector<float> acc = random_floats((size_t)B * N * 18, 4, 0.3f);
-    std::vector<uint8_t> bundle = {'M', 'O', 'C', 'A', 'P', 'T', 'N', 'S'};
-    put_u32(bundle, 1);
-    put_u32(bundle, 2);
-    put_tensor(bundle, "imu_orientation", {B, N, 6, 3, 3}, ori);
-    put_tensor(bundle, "imu_acceleration", {B, N, 6, 3}, acc);
+    std::vector<uint8_t> bundle = tensor_bundle_bytes({{"imu_orientation", {B, N, 6, 3, 3}, ori},
+                                                       {"imu_acceleration", {B, N, 6, 3}, acc}});
     std::string in = dir + "/in.tensors";
     write_file_bytes(in, bundle);
     std::string base = std::string(MOCAP_MOCAPCTL) + " infer --model " + dir + "/valid.onnx" +
@@ -436,9 +392,9 @@ TEST(OnnxRuntime, MocapctlInferStreamMatchesWholeClip)
     EXPECT_NE(r2.find("timing: calls 7 frames_per_call 1"), std::string::npos) << r2;
     std::string r3 = run_capture(base + dir + "/chunks.tensors --frames 3 2>&1");
     ASSERT_NE(r3.find("rc=0"), std::string::npos) << r3;
-    auto whole = get_tensor(read_file_bytes(dir + "/whole.tensors"), "root_velocity");
-    auto stream = get_tensor(read_file_bytes(dir + "/stream.tensors"), "root_velocity");
-    auto chunks = get_tensor(read_file_bytes(dir + "/chunks.tensors"), "root_velocity");
+    auto whole = tensor_bundle_get(read_file_bytes(dir + "/whole.tensors"), "root_velocity");
+    auto stream = tensor_bundle_get(read_file_bytes(dir + "/stream.tensors"), "root_velocity");
+    auto chunks = tensor_bundle_get(read_file_bytes(dir + "/chunks.tensors"), "root_velocity");
     ASSERT_EQ(whole.size(), (size_t)N * 3);
     ASSERT_EQ(stream.size(), whole.size());
     ASSERT_EQ(chunks.size(), whole.size());
@@ -449,7 +405,7 @@ TEST(OnnxRuntime, MocapctlInferStreamMatchesWholeClip)
         EXPECT_NEAR(stream[t * 3], cum, 1e-4);
         EXPECT_NEAR(chunks[t * 3], cum, 1e-4);
     }
-    auto state = get_tensor(read_file_bytes(dir + "/chunks.tensors"), "state_out_h");
+    auto state = tensor_bundle_get(read_file_bytes(dir + "/chunks.tensors"), "state_out_h");
     ASSERT_EQ(state.size(), 8u);
     EXPECT_NEAR(state[0], cum, 1e-4);
 

@@ -101,9 +101,10 @@ mocap_status open_model(const std::string &path, mocap_model **out)
     return mocap_model_open(path.c_str(), &o, out);
 }
 
-// A short generated capture with a calibration prelude (2 s heading, 1 s strap, 2 s T-pose).
+// A short generated capture with a calibration prelude (2 s heading, 1 s strap, 2 s T-pose);
+// extra_chest adds a chest sensor on node 6 to the default six.
 synth_config short_capture(uint64_t seed, double motion_s, const char *motion,
-                           const std::string &path)
+                           const std::string &path, bool extra_chest = false)
 {
     synth_config cfg;
     synth_config_defaults(&cfg);
@@ -113,21 +114,29 @@ synth_config short_capture(uint64_t seed, double motion_s, const char *motion,
     cfg.tpose_s = 2.0;
     cfg.motion_s = motion_s;
     add_realistic_noise(cfg);
+    if (extra_chest) {
+        cfg.segments[cfg.sensor_count] = MOCAP_SEGMENT_CHEST;
+        cfg.node_ids[cfg.sensor_count] = 6;
+        cfg.sensor_count++;
+    }
     EXPECT_EQ(synth_write_capture(&cfg, synth_builtin_motion(motion), nullptr, path.c_str(), nullptr),
               MOCAP_OK) << mocap_last_error();
     return cfg;
 }
 
-// Opens a replay of the capture with both prelude windows scheduled before the start.
-mocap_session *open_replay(const std::string &path, const synth_config &cfg, int realtime = 0,
-                           float rate = 60.0f)
+// A replay session config of the capture (the default sensor set).
+mocap_session_config replay_config(const std::string &path)
 {
     mocap_session_config c;
     mocap_config_defaults(&c);
     c.source_kind = MOCAP_SOURCE_REPLAY;
-    c.replay_realtime = realtime;
-    c.output_rate_hz = rate;
     snprintf(c.path, sizeof c.path, "%s", path.c_str());
+    return c;
+}
+
+// Opens the session with both prelude windows of cfg's capture scheduled before the start.
+mocap_session *open_with_prelude(const mocap_session_config &c, const synth_config &cfg)
+{
     mocap_session *s = nullptr;
     EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_OK) << mocap_last_error();
     if (!s) return nullptr;
@@ -138,6 +147,16 @@ mocap_session *open_replay(const std::string &path, const synth_config &cfg, int
                                          t0 + cfg.heading_s + cfg.strap_s + 0.5,
                                          (float)(cfg.tpose_s - 1.0)), MOCAP_OK);
     return s;
+}
+
+// Opens a replay of the capture with both prelude windows scheduled before the start.
+mocap_session *open_replay(const std::string &path, const synth_config &cfg, int realtime = 0,
+                           float rate = 60.0f)
+{
+    mocap_session_config c = replay_config(path);
+    c.replay_realtime = realtime;
+    c.output_rate_hz = rate;
+    return open_with_prelude(c, cfg);
 }
 
 // Drains every character until each reported END_OF_STREAM (or the timeout).
@@ -1001,35 +1020,12 @@ TEST_F(SolverOnShippedModel, PollAfterALongPauseReturnsTheNewestPose)
 
 namespace {
 
-// The default six plus a chest sensor on node 6, with the usual calibration prelude.
-synth_config seven_sensor_capture(uint64_t seed, double motion_s, const std::string &path,
-                                  const char *motion = "mixed")
-{
-    synth_config cfg;
-    synth_config_defaults(&cfg);
-    cfg.seed = seed;
-    cfg.heading_s = 2.0;
-    cfg.strap_s = 1.0;
-    cfg.tpose_s = 2.0;
-    cfg.motion_s = motion_s;
-    add_realistic_noise(cfg);
-    cfg.sensor_count = 7;
-    cfg.segments[6] = MOCAP_SEGMENT_CHEST;
-    cfg.node_ids[6] = 6;
-    EXPECT_EQ(synth_write_capture(&cfg, synth_builtin_motion(motion), nullptr, path.c_str(), nullptr),
-              MOCAP_OK) << mocap_last_error();
-    return cfg;
-}
-
 // A replay whose session carries the first `count` sensors of the default set, plus the chest
 // on node 6 when with_chest; calibration scheduled as open_replay does.
 mocap_session *open_replay_sensors(const std::string &path, const synth_config &cfg, uint32_t count,
                                    bool with_chest, uint32_t optional_mask = 0)
 {
-    mocap_session_config c;
-    mocap_config_defaults(&c);
-    c.source_kind = MOCAP_SOURCE_REPLAY;
-    snprintf(c.path, sizeof c.path, "%s", path.c_str());
+    mocap_session_config c = replay_config(path);
     c.sensor_count = count;
     if (with_chest) {
         c.sensor_segments[c.sensor_count] = MOCAP_SEGMENT_CHEST;
@@ -1037,16 +1033,7 @@ mocap_session *open_replay_sensors(const std::string &path, const synth_config &
         c.sensor_count++;
     }
     c.optional_mask = optional_mask;
-    mocap_session *s = nullptr;
-    EXPECT_EQ(mocap_session_open(&c, &s), MOCAP_OK) << mocap_last_error();
-    if (!s) return nullptr;
-    double t0 = synth_session_time(&cfg, 0.0);
-    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_HEADING, t0 + 0.5,
-                                         (float)(cfg.heading_s - 1.0)), MOCAP_OK);
-    EXPECT_EQ(mocap_calibration_schedule(s, MOCAP_CALIBRATION_TPOSE,
-                                         t0 + cfg.heading_s + cfg.strap_s + 0.5,
-                                         (float)(cfg.tpose_s - 1.0)), MOCAP_OK);
-    return s;
+    return open_with_prelude(c, cfg);
 }
 
 struct ChestTap {
@@ -1105,7 +1092,7 @@ TEST(SolverSensorSets, ContractTwoModelReceivesTheChestAndItsMask)
     EXPECT_EQ(info.sensor_required_mask, 0x3fu);
 
     std::string cap = dir + "/seven.cap";
-    synth_config cfg = seven_sensor_capture(71, 3.0, cap, "turn");
+    synth_config cfg = short_capture(71, 3.0, "turn", cap, true);
     Sessions sessions;
     sessions.list.push_back(open_replay_sensors(cap, cfg, 6, true));
     ASSERT_NE(sessions.list[0], nullptr);
@@ -1142,7 +1129,7 @@ TEST(SolverSensorSets, ContractTwoModelRunsWithoutItsOptionalSensor)
     Model model;
     ASSERT_EQ(open_model(dir + "/v2_chest.onnx", &model.m), MOCAP_OK) << mocap_last_error();
     std::string cap = dir + "/seven.cap";
-    synth_config cfg = seven_sensor_capture(72, 2.0, cap);
+    synth_config cfg = short_capture(72, 2.0, "mixed", cap, true);
     Sessions sessions;
     sessions.list.push_back(open_replay_sensors(cap, cfg, 6, false));
     ASSERT_NE(sessions.list[0], nullptr);
@@ -1172,7 +1159,7 @@ TEST(SolverSensorSets, MissingRequiredSensorIsRefusedNamingIt)
     std::string dir = test_temp_dir();
     ASSERT_TRUE(write_onnx_fixtures(dir));
     std::string cap = dir + "/seven.cap";
-    synth_config cfg = seven_sensor_capture(73, 0.5, cap);
+    synth_config cfg = short_capture(73, 0.5, "mixed", cap, true);
     for (const char *file : {"v2_chest.onnx", "valid.onnx"}) {
         Model model;
         ASSERT_EQ(open_model(dir + "/" + file, &model.m), MOCAP_OK) << mocap_last_error();
@@ -1235,7 +1222,7 @@ TEST(SolverSensorSets, MaskFollowsEachSensorsState)
 TEST_F(SolverOnShippedModel, ExtraSensorLeavesAContractOneModelUntouched)
 {
     std::string cap = test_temp_path("seven.cap");
-    synth_config cfg = seven_sensor_capture(74, 3.0, cap);
+    synth_config cfg = short_capture(74, 3.0, "mixed", cap, true);
     Sessions six, seven;
     six.list.push_back(open_replay_sensors(cap, cfg, 6, false));
     seven.list.push_back(open_replay_sensors(cap, cfg, 6, true));

@@ -4,6 +4,7 @@
 
 #include <cctype>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -161,3 +162,51 @@ OpenedDescriptors descriptors_opened_by(const std::function<void()> &action)
     return out;
 }
 #endif
+
+static void put_u32(std::vector<uint8_t> &b, uint32_t v)
+{
+    for (int i = 0; i < 4; ++i) b.push_back((uint8_t)(v >> (8 * i)));
+}
+
+static uint32_t get_u32(const std::vector<uint8_t> &b, size_t at)
+{
+    return (uint32_t)b[at] | (uint32_t)b[at + 1] << 8 | (uint32_t)b[at + 2] << 16 |
+           (uint32_t)b[at + 3] << 24;
+}
+
+std::vector<uint8_t> tensor_bundle_bytes(const std::vector<BundleTensor> &tensors)
+{
+    std::vector<uint8_t> b = {'M', 'O', 'C', 'A', 'P', 'T', 'N', 'S'};
+    put_u32(b, 1);
+    put_u32(b, (uint32_t)tensors.size());
+    for (const BundleTensor &t : tensors) {
+        char n[32] = {0};
+        std::snprintf(n, sizeof n, "%s", t.name.c_str());
+        b.insert(b.end(), n, n + 32);
+        put_u32(b, (uint32_t)t.dims.size());
+        for (uint32_t d : t.dims) put_u32(b, d);
+        const uint8_t *p = reinterpret_cast<const uint8_t *>(t.data.data());
+        b.insert(b.end(), p, p + t.data.size() * 4); // little-endian host (x86, ARM)
+    }
+    return b;
+}
+
+std::vector<float> tensor_bundle_get(const std::vector<uint8_t> &b, const std::string &want)
+{
+    if (b.size() < 16 || std::memcmp(b.data(), "MOCAPTNS", 8) != 0) return {};
+    size_t pos = 16;
+    for (uint32_t i = 0, count = get_u32(b, 12); i < count; ++i) {
+        std::string name(reinterpret_cast<const char *>(&b[pos]));
+        uint32_t rank = get_u32(b, pos + 32);
+        size_t n = 1;
+        for (uint32_t d = 0; d < rank; ++d) n *= get_u32(b, pos + 36 + 4 * d);
+        pos += 36 + 4 * rank;
+        if (name == want) {
+            std::vector<float> out(n);
+            std::memcpy(out.data(), &b[pos], n * 4);
+            return out;
+        }
+        pos += n * 4;
+    }
+    return {};
+}

@@ -13,6 +13,16 @@ std::vector<uint8_t> hex_bytes(const std::string &hex); // whitespace ignored
 std::vector<uint8_t> read_file_bytes(const std::string &path);
 void write_file_bytes(const std::string &path, const std::vector<uint8_t> &bytes);
 
+// A tensor bundle file of float tensors, in order (mocapctl infer's format, cmd_infer.c).
+struct BundleTensor {
+    std::string name;
+    std::vector<uint32_t> dims;
+    std::vector<float> data;
+};
+std::vector<uint8_t> tensor_bundle_bytes(const std::vector<BundleTensor> &tensors);
+// The named tensor's data in a bundle (empty if absent or not a bundle).
+std::vector<float> tensor_bundle_get(const std::vector<uint8_t> &bundle, const std::string &name);
+
 // A shell command's exit code and its stdout and stderr together.
 struct CommandResult {
     int exit_code = -1;

@@ -942,6 +942,17 @@ synth_config seven_sensor_config()
     return cfg;
 }
 
+// Generation of cfg is refused before any packet, with a message containing needle.
+void expect_generation_refused(const synth_config &cfg, const char *needle)
+{
+    Stream s;
+    EXPECT_EQ(synth_generate(&cfg, nullptr, nullptr, collect_packet, &s), MOCAP_ERR_INVALID_ARGUMENT)
+        << needle;
+    EXPECT_TRUE(s.packets.empty());
+    EXPECT_NE(std::string(mocap_last_error()).find(needle), std::string::npos)
+        << needle << ": " << mocap_last_error();
+}
+
 TEST(SynthSensorSet, DefaultsAreTheEngineDefaultSet)
 {
     synth_config cfg;
@@ -1171,12 +1182,7 @@ TEST(SynthSilence, BadWindowsAreRefusedNamingTheProblem)
     for (const Case &k : cases) {
         synth_config cfg = short_config();
         k.change(cfg);
-        Stream s;
-        EXPECT_EQ(synth_generate(&cfg, nullptr, nullptr, collect_packet, &s), MOCAP_ERR_INVALID_ARGUMENT)
-            << k.needle;
-        EXPECT_TRUE(s.packets.empty());
-        EXPECT_NE(std::string(mocap_last_error()).find(k.needle), std::string::npos)
-            << k.needle << ": " << mocap_last_error();
+        expect_generation_refused(cfg, k.needle);
     }
 }
 
@@ -1198,12 +1204,7 @@ TEST(SynthSensorSet, BadSetsAreRefusedNamingTheProblem)
     for (const Case &k : cases) {
         synth_config cfg = seven_sensor_config();
         k.change(cfg);
-        Stream s;
-        EXPECT_EQ(synth_generate(&cfg, nullptr, nullptr, collect_packet, &s), MOCAP_ERR_INVALID_ARGUMENT)
-            << k.needle;
-        EXPECT_TRUE(s.packets.empty());
-        EXPECT_NE(std::string(mocap_last_error()).find(k.needle), std::string::npos)
-            << k.needle << ": " << mocap_last_error();
+        expect_generation_refused(cfg, k.needle);
     }
 }
 
