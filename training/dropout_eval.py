@@ -1,13 +1,14 @@
 """missing-sensor: one sensor silent for a few seconds, scored through the engine's whole path.
 
     python3 -m training missing-sensor [--split val | --split test | --bvh DIR | --procedural]
-        [--clips 15] [--clip-seconds 25] [--seconds 5] [--model M.onnx] [--segments A,B,...]
-        [--seed 0] [--out FILE] [--keep DIR]
+        [--clips 15] [--clip-seconds 25] [--seconds 5] [--model M.onnx] [--sensors A,B,...]
+        [--segments A,B,...] [--seed 0] [--out FILE] [--keep DIR]
 
 For each clip (the first --clip-seconds of evenly spaced clips at least MIN_CLIP_S long) and each
-condition, "none" then each segment of the model's sensors in turn: synth_capture writes the
-capture (calibration prelude, realistic noise, random mountings and headings) with that segment's
-sensor sending nothing for --seconds in the middle of the clip (`mocapctl synth --silence`), then
+condition, "none" then each segment of the capture's sensors in turn (--sensors: the capture's
+sensor set, default the model's sensors; a contract-2 model's optional sensors can be left out of
+it): synth_capture writes the capture (calibration prelude, realistic noise, random mountings and
+headings) with that segment's sensor sending nothing for --seconds in the middle of the clip (`mocapctl synth --silence`), then
 `mocapctl replay --model M --truth --pose-csv --metrics-json` runs it through decode -> filter ->
 calibrate -> model -> output filter -> drift correction, and its poses are compared with the truth
 frame by frame. Every condition of a clip uses the same seed, so its capture is byte for byte the
@@ -55,7 +56,7 @@ import numpy as np
 from . import skeleton as sk
 from .cli import POSITIVE_INT, NON_NEGATIVE_INT, number_type
 from .errors import CommandError, UsageError
-from .sensors import DEFAULT_SENSORS, sensor_bones, sensor_list
+from .sensors import DEFAULT_SENSORS, node_ids, sensor_bones, sensor_list
 
 REPO = Path(__file__).resolve().parent.parent
 MODELS_DIR = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
@@ -278,11 +279,21 @@ def frame_errors(run: Run) -> FrameErrors:
     return FrameErrors(angle, pos, g, tg, joint_speed(p, run.fps), joint_speed(tp, run.fps))
 
 
-def replay(mocapctl, capture: Path, truth_csv: Path, model, workdir: Path, stem: str):
-    """mocapctl replay with the model: (time_s, flags, root, quats, metrics json)."""
+def session_sensors_argument(sensors) -> str:
+    """mocapctl's --sensors for a capture of these segments (node ids as synth_capture gives
+    them)."""
+    return ",".join(f"{name}={node}" for name, node in zip(sensors, node_ids(sensors)))
+
+
+def replay(mocapctl, capture: Path, truth_csv: Path, model, workdir: Path, stem: str,
+           sensors=DEFAULT_SENSORS):
+    """mocapctl replay with the model, a session of the capture's sensors: (time_s, flags, root,
+    quats, metrics json)."""
     poses, metrics = workdir / f"{stem}.poses.csv", workdir / f"{stem}.metrics.json"
     cmd = [str(mocapctl), "replay", str(capture), "--model", str(model), "--truth", str(truth_csv),
            "--pose-csv", str(poses), "--metrics-json", str(metrics)]
+    if tuple(sensors) != tuple(DEFAULT_SENSORS):
+        cmd += ["--sensors", session_sensors_argument(sensors)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         raise CommandError(f"mocapctl replay {capture.name} failed (status {r.returncode}): "
@@ -401,13 +412,15 @@ def gap_window(motion: sk.Motion, gap_s: float, lead_in: float = LEAD_IN_S) -> W
 
 
 def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Path, seed: int,
-                  world: str = "enu", mocapctl=None) -> list:
-    """Every condition ("none" first, then each segment silent) of one clip -> [ConditionScore]."""
+                  world: str = "enu", mocapctl=None, sensors=DEFAULT_SENSORS) -> list:
+    """Every condition ("none" first, then each segment silent) of one clip -> [ConditionScore].
+    sensors: the capture's (and the session's) sensor set."""
     from .ort import mocapctl_path
     from .synth_capture import Silence, load_truth, synth_capture
     mocapctl = mocapctl or mocapctl_path(require_onnx=True)
     windows = gap_window(motion, gap_s)
-    bones = dict(zip(DEFAULT_SENSORS, sensor_bones("hand", DEFAULT_SENSORS)))
+    sensors = tuple(sensors)
+    bones = dict(zip(sensors, sensor_bones("hand", sensors)))
     scores, ref = [], None
     for condition in (NONE, *segments):
         stem = f"{motion.name}-{condition}"
@@ -415,10 +428,10 @@ def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Pat
         silences = () if condition == NONE else (
             Silence(condition, windows.gap_start, windows.gap_end - windows.gap_start),)
         synth_capture(None, cap, motion=motion, seed=seed, world=world, lead_in=LEAD_IN_S,
-                      silences=silences)
+                      silences=silences, sensors=sensors)
         truth = load_truth(cap.with_suffix(".truth.npz"))
         time_s, flags, root, quats, metrics = replay(mocapctl, cap, cap.with_suffix(".truth.csv"),
-                                                     model, workdir, stem)
+                                                     model, workdir, stem, sensors)
         run = align_to_truth(time_s, flags, root, quats, truth, metrics)
         err = frame_errors(run)
         bone = None if condition == NONE else bones[condition]
@@ -649,7 +662,7 @@ def write_report(path: Path, scores, meta: dict) -> Path:
               f"- gap: [{meta['gap_s']:g} s window centred on the clip], after: the "
               f"{RECOVERY_WINDOW_S:g} s after it, elsewhere: every other replayed frame.",
               f"- its bone: the global orientation error of the bone the silent sensor reports "
-              f"(pelvis, hands, shins, head), mean over the gap; in brackets the same bone "
+              f"(its sensor's bone in the table), mean over the gap; in brackets the same bone "
               f"and frames with every sensor.",
               f"- freeze: the longest stretch, in the gap and the window after it, in which the pose "
               f"moves at less than {FREEZE_RATIO:g} x the truth's speed while the truth moves (body: "
@@ -674,7 +687,7 @@ def write_report(path: Path, scores, meta: dict) -> Path:
 
 # ------------------------------------------------------------------------------ command
 def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, model=DEFAULT_MODEL,
-                   seed: int = 0, workdir=None, progress=print) -> list:
+                   seed: int = 0, workdir=None, progress=print, sensors=DEFAULT_SENSORS) -> list:
     """Every clip's conditions -> [ConditionScore] (clip order, "none" first in each clip)."""
     from .ort import mocapctl_path
     mocapctl = mocapctl_path(require_onnx=True)
@@ -686,7 +699,8 @@ def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, mode
             d.mkdir(parents=True, exist_ok=True)
             t0 = time.monotonic()
             clip_scores = evaluate_clip(motion, segments, gap_s, model, d, seed + i,
-                                        world="enu" if i % 2 == 0 else "nwu", mocapctl=mocapctl)
+                                        world="enu" if i % 2 == 0 else "nwu", mocapctl=mocapctl,
+                                        sensors=sensors)
             scores += clip_scores
             if progress:
                 worst = max((s.recovery for s in clip_scores[1:]), default=math.nan)
@@ -696,8 +710,9 @@ def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, mode
 
 
 def model_info(model) -> tuple:
-    """(contract version, sensor segments) a model declares, as `mocapctl model-info` reads
-    them (the engine refuses a model that breaks the contract: a CommandError here)."""
+    """(contract version, sensor segments, optional segments) a model declares, as `mocapctl
+    model-info` reads them (the engine refuses a model that breaks the contract: a CommandError
+    here)."""
     from .ort import mocapctl_path
     r = subprocess.run([str(mocapctl_path(require_onnx=True)), "model-info", str(model)],
                        capture_output=True, text=True)
@@ -710,7 +725,9 @@ def model_info(model) -> tuple:
             fields.setdefault(parts[0], parts[1])
     if "contract_version" not in fields or "sensor_order" not in fields:
         raise CommandError(f"mocapctl model-info {model}: no contract_version or sensor_order line")
-    return int(fields["contract_version"]), tuple(fields["sensor_order"].split(","))
+    optional = fields.get("optional", "none")
+    return (int(fields["contract_version"]), tuple(fields["sensor_order"].split(",")),
+            () if optional == "none" else tuple(optional.split(",")))
 
 
 _SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
@@ -733,8 +750,11 @@ def add_arguments(p=None):
                    help=f"how long the sensor is silent (default {GAP_S:g})")
     p.add_argument("--model", default=str(DEFAULT_MODEL), help="the ONNX model (default: the shipped "
                    "int8 one, the engine's default)")
+    p.add_argument("--sensors", default=None,
+                   help="the capture's sensors, comma-separated (default: the model's; a contract-2 "
+                        "model's optional sensors may be left out, e.g. its six without the chest)")
     p.add_argument("--segments", default=None,
-                   help="the sensors to silence in turn, comma-separated (default: each the model reads)")
+                   help="the sensors to silence in turn, comma-separated (default: each of the capture's)")
     p.add_argument("--seed", type=NON_NEGATIVE_INT, default=0)
     p.add_argument("--out", default=None, help="the report (default training/results/missing_sensor.md, "
                    "training/results/test/missing_sensor.md for --split test)")
@@ -755,18 +775,27 @@ def main(args=None) -> int:
     model = Path(args.model)
     if not model.is_file():
         raise UsageError(f"--model {args.model}: no such file")
-    contract, sensors = model_info(model)
+    contract, model_sensors, optional = model_info(model)
+    try:
+        sensors = sensor_list(args.sensors) if getattr(args, "sensors", None) else model_sensors
+    except ValueError as e:
+        raise UsageError(f"--sensors: {e}") from e
+    needed = [s for s in model_sensors if s not in optional and s not in sensors]
+    if needed:
+        raise UsageError(f"--sensors: {model.name} needs {', '.join(needed)} (it can do without "
+                         f"{', '.join(optional) or 'none of its sensors'})")
+    unread = [s for s in sensors if s not in model_sensors]
+    if unread:
+        raise UsageError(f"--sensors: {model.name} does not read {', '.join(unread)} "
+                         f"({', '.join(model_sensors)})")
     try:
         segments = sensor_list(args.segments) if args.segments else sensors
     except ValueError as e:
         raise UsageError(f"--segments: {e}") from e
     missing = [s for s in segments if s not in sensors]
     if missing:
-        raise UsageError(f"--segments: {', '.join(missing)} is not a sensor of {model.name} "
+        raise UsageError(f"--segments: {', '.join(missing)} is not a sensor of the capture "
                          f"({', '.join(sensors)})")
-    if sensors != DEFAULT_SENSORS:
-        raise UsageError(f"{model.name} reads {', '.join(sensors)}: this evaluation makes captures of "
-                         f"the default six sensors only")
     min_s = min(MIN_CLIP_S, args.clip_seconds)
     if min_s < args.seconds + 2 * RECOVERY_WINDOW_S:
         raise UsageError(f"--clip-seconds {args.clip_seconds:g} leaves no room for a {args.seconds:g} s "
@@ -786,9 +815,17 @@ def main(args=None) -> int:
     print(f"missing-sensor: {len(motions)} clips ({source}) x {1 + len(segments)} conditions, "
           f"{args.seconds:g} s gaps, model {_shown(model)} (contract {contract})")
     started = time.monotonic()
-    scores = run_evaluation(motions, segments, args.seconds, model, args.seed, args.keep)
+    scores = run_evaluation(motions, segments, args.seconds, model, args.seed, args.keep,
+                            sensors=sensors)
     command = "python3 -m training missing-sensor " + " ".join(shlex.quote(a) for a in _argv_of(args))
     notes = []
+    left_out = [s for s in model_sensors if s not in sensors]
+    if left_out:
+        notes.append(f"The capture has {len(sensors)} sensors ({', '.join(sensors)}); the model's "
+                     f"{', '.join(left_out)} is absent throughout (masked).")
+    if contract >= 2:
+        notes.append("The model is of contract 2: the engine holds a silent sensor's last sample "
+                     "briefly, then feeds it masked (imu_mask 0, zero inputs) until it returns.")
     if contract == 1:
         notes.append("The model is of contract 1 (no `imu_mask`): the engine feeds a silent "
                      "sensor's last held orientation and acceleration until it returns (a contract 2 "
@@ -816,6 +853,8 @@ def _argv_of(args) -> list:
             f"{args.seconds:g}", "--seed", str(args.seed)]
     if Path(args.model).resolve() != DEFAULT_MODEL.resolve():
         out += ["--model", _shown(args.model)]
+    if getattr(args, "sensors", None):
+        out += ["--sensors", args.sensors]
     if args.segments:
         out += ["--segments", args.segments]
     if args.out:

@@ -98,6 +98,24 @@ class Clip:
     root_pos: np.ndarray           # (T,3) truth
     subject: int = 0               # 0: unknown (a BVH folder without NN_MM names)
     sensors: tuple = DEFAULT_SENSORS   # segment names of the N sensors
+    mask: np.ndarray | None = None     # (T,N) 1 where a sensor is present; None: all present
+
+
+def without_sensors(clip: Clip, absent) -> Clip:
+    """The clip as the engine feeds a masked model whose `absent` sensors (segment names) are
+    missing for the whole clip: mask 0, orientation and acceleration zero."""
+    absent = tuple(absent)
+    if not absent:
+        return clip
+    unknown = [a for a in absent if a not in clip.sensors]
+    if unknown:
+        raise UsageError(f"{', '.join(unknown)}: not among the clip's sensors ({', '.join(clip.sensors)})")
+    T, n = clip.imu_orientation.shape[:2]
+    mask = np.ones((T, n), np.float32) if clip.mask is None else clip.mask.copy()
+    for a in absent:
+        mask[:, clip.sensors.index(a)] = 0.0
+    return replace(clip, imu_orientation=clip.imu_orientation * mask[..., None, None],
+                   imu_acceleration=clip.imu_acceleration * mask[..., None], mask=mask)
 
 
 def synthesize_clip(motion: sk.Motion, rng, wrist: str = "hand", noise: str = "realistic",
@@ -124,13 +142,14 @@ def predict_baseline(clip: Clip, wrist: str = "hand") -> Prediction:
     T = clip.imu_orientation.shape[0]
     ori = clip.imu_orientation.astype(np.float64)
     local = np.broadcast_to(np.eye(3), (T, 24, 3, 3)).copy()
+    present = np.ones(ori.shape[:2], bool) if clip.mask is None else clip.mask > 0.5
     pelvis = ori[:, list(clip.sensors).index("pelvis")] if "pelvis" in clip.sensors else np.eye(3)
     local[:, 0] = pelvis
     # Every ancestor of the sensor bones (other than the pelvis) is at rest, so the parent's
-    # global rotation is the pelvis's.
+    # global rotation is the pelvis's. A missing sensor leaves its bone at rest.
     for s, j in enumerate(sensor_bones(wrist, clip.sensors)):
         if j != 0:
-            local[:, j] = np.swapaxes(pelvis, -1, -2) @ ori[:, s]
+            local[present[:, s], j] = (np.swapaxes(pelvis, -1, -2) @ ori[:, s])[present[:, s]]
     return Prediction(local, np.zeros((T, 3)))
 
 
@@ -149,24 +168,41 @@ def _batches(clips, max_batch=16, max_values=60_000_000):
 
 
 def _padded(clips, group):
+    """(orientation, acceleration, mask) of a group of clips, padded to the longest."""
     T = max(clips[i].imu_orientation.shape[0] for i in group)
     n = clips[group[0]].imu_orientation.shape[1]
     ori = np.tile(np.eye(3, dtype=np.float32), (len(group), T, n, 1, 1))
     acc = np.zeros((len(group), T, n, 3), np.float32)
+    mask = np.ones((len(group), T, n), np.float32)
     for b, i in enumerate(group):
         n = clips[i].imu_orientation.shape[0]
         ori[b, :n] = clips[i].imu_orientation
         acc[b, :n] = clips[i].imu_acceleration
-    return ori, acc
+        if clips[i].mask is not None:
+            mask[b, :n] = clips[i].mask
+    return ori, acc, mask
+
+
+def _has_missing(clips) -> bool:
+    return any(c.mask is not None and not (c.mask > 0.5).all() for c in clips)
 
 
 def predict_onnx(model_path, clips) -> list:
-    from .ort import run_onnx
-    _require_sensors(clips, DEFAULT_SENSORS, f"{Path(model_path).name} (model contract 1)")
+    """The ONNX model through the engine's ONNX Runtime module; a contract-2 model gets each
+    clip's mask (imu_mask), a contract-1 model needs every sensor present."""
+    from .ort import model_info, run_onnx
+    info = model_info(model_path)
+    sensors = tuple(info.get("sensor_order", ",".join(DEFAULT_SENSORS)).split(","))
+    masked = bool(info.get("imu_mask"))
+    _require_sensors(clips, sensors, f"{Path(model_path).name} (model contract "
+                     f"{info.get('contract_version', '?')})")
+    if not masked and _has_missing(clips):
+        raise UsageError(f"{Path(model_path).name} has no imu_mask input: it cannot run with a "
+                         "sensor missing")
     out = [None] * len(clips)
     for group in _batches(clips):
-        ori, acc = _padded(clips, group)
-        r = run_onnx(model_path, ori, acc)
+        ori, acc, mask = _padded(clips, group)
+        r = run_onnx(model_path, ori, acc, mask=mask if masked else None)
         for b, i in enumerate(group):
             n = clips[i].imu_orientation.shape[0]
             out[i] = Prediction(r["joint_rotations"][b, :n].astype(np.float64),
@@ -225,12 +261,16 @@ def predict_torch(net, clips) -> list:
     from .train import setup_threads
     import torch
     _require_sensors(clips, net.config.sensors, "the PyTorch network")
+    masked = getattr(getattr(net, "config", None), "masked", False)
+    if not masked and _has_missing(clips):
+        raise UsageError("the PyTorch network has no sensor mask: it cannot run with a sensor missing")
     setup_threads()  # OpenBLAS threads its own GEMMs; torch threads on top oversubscribe
     out = [None] * len(clips)
     with torch.no_grad():
         for group in _batches(clips):
-            ori, acc = _padded(clips, group)
-            rot, vel, _, _ = net(torch.from_numpy(ori), torch.from_numpy(acc))
+            ori, acc, mask = _padded(clips, group)
+            rot, vel, _, _ = net(torch.from_numpy(ori), torch.from_numpy(acc),
+                                 imu_mask=torch.from_numpy(mask) if masked else None)
             for b, i in enumerate(group):
                 n = clips[i].imu_orientation.shape[0]
                 out[i] = Prediction(rot[b, :n].double().numpy(), vel[b, :n].double().numpy())
@@ -475,6 +515,18 @@ def write_clip_table(out_dir, results) -> Path:
     return path
 
 
+def _sensor_description(meta) -> str:
+    """The report's words on which sensors the models read (nothing for the default six)."""
+    sensors, absent = tuple(meta.get("sensors") or DEFAULT_SENSORS), tuple(meta.get("absent") or ())
+    if sensors == tuple(DEFAULT_SENSORS) and not absent:
+        return ""
+    present = [x for x in sensors if x not in absent]
+    text = f" Sensors: {len(present)} ({', '.join(present)})"
+    if absent:
+        text += f"; missing for the whole clip, masked: {', '.join(absent)}"
+    return text + "."
+
+
 _WRIST_WORDS = {"hand": "back of the hands", "forearm": "forearms (wrist straps)"}
 
 
@@ -488,6 +540,7 @@ def write_report(out_dir, results, meta, latency, params, truth_jit):
              f"synthesised {_NOISE_WORDS[meta.get('noise_kind', 'realistic')]} ({meta['noise']}), "
              f"seed {meta['seed']}, "
              f"wrist sensors on the {_WRIST_WORDS[meta.get('wrist', 'hand')]}."
+             + _sensor_description(meta)
              + _torch_description(meta), "",
              "Synthetic inputs from motion capture: not directly comparable to published numbers on "
              "real sensors (field-notes section 1).", "",
@@ -619,18 +672,19 @@ def write_plots(out_dir, results, accs, clips):
 # ------------------------------------------------------------------------------ driver
 def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, latency=True,
              latency_frames=1800, source="", progress=True, mirror=True, wrist="hand",
-             noise="realistic", sensors=DEFAULT_SENSORS) -> dict:
+             noise="realistic", sensors=DEFAULT_SENSORS, absent=()) -> dict:
     """Evaluate every available method on the motions; writes the report; returns summaries.
     mirror: the PyTorch model is the mirror-averaged pair (model.MirrorEnsemble), as exported.
     wrist: where the synthesised wrist sensors are ("hand": on the back of the hands, where the
     shipped model expects them; "forearm": wrist straps, sensors.sensor_bones).
     noise: "realistic" sensor errors (what the targets are for) or "none" (perfect sensors).
-    sensors: the segment names synthesised, in the models' input order."""
+    sensors: the segment names synthesised, in the models' input order; absent: those of them
+    missing for the whole of every clip (mask 0, zero inputs: masked models only)."""
     for m in motions:
         if m.num_frames == 0:
             raise UsageError(f"motion {m.name}: no frames to evaluate")
     rng = np.random.default_rng(seed)
-    clips = [synthesize_clip(m, rng, wrist, noise, sensors) for m in motions]
+    clips = [without_sensors(synthesize_clip(m, rng, wrist, noise, sensors), absent) for m in motions]
     if not clips:
         raise UsageError("no motions to evaluate")
     preds = {"baseline": [predict_baseline(c, wrist) for c in clips]}
@@ -679,6 +733,7 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
     meta = {"when": time.strftime("%Y-%m-%d %H:%M"), "source": source, "clips": len(clips),
             "seconds": sum(c.local_rot.shape[0] / c.fps for c in clips), "seed": seed,
             "noise": _describe(eval_augmentation(noise)), "noise_kind": noise, "latency_frames": latency_frames, "wrist": wrist,
+            "sensors": tuple(sensors), "absent": tuple(absent),
             "torch": "mirror-averaged (model.MirrorEnsemble)" if mirror else "single network",
             "checkpoint": _shown_path(checkpoint) if checkpoint else None, "torch_onnx_diff": diff}
     tj = truth_jitter(clips)
@@ -761,6 +816,9 @@ def add_arguments(p):
     p.add_argument("--noise", default="realistic", choices=NOISE_CHOICES,
                    help="sensor errors of the synthesised inputs: realistic (default; the targets are "
                         "for it) or none (perfect sensors: what the model reaches without them)")
+    p.add_argument("--absent", default=None,
+                   help="sensors missing for the whole of every clip, comma-separated (e.g. chest): "
+                        "masked (model contract 2) models only")
     p.add_argument("--no-latency", action="store_true")
     p.add_argument("--no-cache", action="store_true", help="do not cache converted BVH clips")
     return p
@@ -774,12 +832,39 @@ def expected_wrist_sensor(checkpoint) -> str:
     return load_torch_model(checkpoint, mirror=False).config.wrist_anchor
 
 
-def expected_sensors(checkpoint) -> tuple:
-    """The segment names a checkpoint's network reads (ModelConfig.sensors); the default set
-    without a checkpoint (the ONNX models of contract 1)."""
-    if not checkpoint:
-        return DEFAULT_SENSORS
-    return tuple(load_torch_model(checkpoint, mirror=False).config.sensors)
+def expected_sensors(checkpoint, models=()) -> tuple:
+    """The segment names a checkpoint's network reads (ModelConfig.sensors); without a
+    checkpoint, those of the first ONNX model that exists (its sensor_order), else the default
+    set."""
+    if checkpoint:
+        return tuple(load_torch_model(checkpoint, mirror=False).config.sensors)
+    for m in models:
+        if Path(m).is_file():
+            from .ort import model_info, onnx_runtime_available
+            if onnx_runtime_available():
+                order = model_info(m).get("sensor_order")
+                if order:
+                    return tuple(order.split(","))
+            break
+    return DEFAULT_SENSORS
+
+
+def absent_sensors(text, sensors) -> tuple:
+    """--absent: segment names among `sensors`, never the pelvis (every model needs it)."""
+    if not text:
+        return ()
+    from .sensors import sensor_list
+    try:
+        absent = tuple(sensor_list(text))
+    except ValueError as e:
+        raise UsageError(f"--absent: {e}") from e
+    unknown = [a for a in absent if a not in sensors]
+    if unknown:
+        raise UsageError(f"--absent: {', '.join(unknown)} is not a sensor of the evaluated models "
+                         f"({', '.join(sensors)})")
+    if "pelvis" in absent:
+        raise UsageError("--absent: the pelvis cannot be missing (every model needs it)")
+    return absent
 
 
 def main(args=None) -> int:
@@ -799,11 +884,13 @@ def main(args=None) -> int:
     print(f"evaluate: {len(motions)} clips ({'BVH folder' if args.bvh else 'split'} {source}); "
           f"PyTorch {_shown_path(ckpt) if ckpt else '-'}; ONNX "
           f"{', '.join(_shown_path(m) for m in models) or '-'}")
+    sensors = expected_sensors(ckpt, models)
     r = evaluate(motions, models, ckpt, args.out, args.seed, not args.no_latency,
                  source=f"{'BVH folder ' if args.bvh else 'split '}{source}",
                  mirror=not getattr(args, "no_mirror", False),
                  wrist=getattr(args, "wrist_sensor", None) or expected_wrist_sensor(ckpt),
-                 noise=getattr(args, "noise", "realistic"), sensors=expected_sensors(ckpt))
+                 noise=getattr(args, "noise", "realistic"), sensors=sensors,
+                 absent=absent_sensors(getattr(args, "absent", None), sensors))
     def shown(v, digits):   # "-" where clips are too short to measure (as in the report)
         return f"{v:.{digits}f}" if v == v else "-"
     for name, s in r["results"].items():

@@ -189,8 +189,14 @@ def test_bad_options_are_usage_errors(tmp_path):
 
 @needs_ort
 def test_bad_segment_options_are_usage_errors():
-    with pytest.raises(UsageError, match="chest is not a sensor of mocap_pose_int8.onnx"):
+    with pytest.raises(UsageError, match="chest is not a sensor of the capture"):
         de.main(["--procedural", "--segments", "chest"])
+    with pytest.raises(UsageError, match="mocap_pose_int8.onnx does not read chest"):
+        de.main(["--procedural", "--sensors", "pelvis,left_wrist,right_wrist,left_shin,right_shin,head,chest"])
+    with pytest.raises(UsageError, match="mocap_pose_int8.onnx needs head"):
+        de.main(["--procedural", "--sensors", "pelvis,left_wrist,right_wrist,left_shin,right_shin"])
+    with pytest.raises(UsageError, match="--sensors: unknown segment"):
+        de.main(["--procedural", "--sensors", "pelvis,tail"])
     with pytest.raises(UsageError, match="leaves no room"):
         de.main(["--procedural", "--clip-seconds", "6", "--seconds", "5"])
 
@@ -256,3 +262,38 @@ def test_a_short_run_through_mocapctl_has_the_gap_where_it_was_put(tmp_path):
         err = de.frame_errors(run)
         assert np.nanmean(err.angle) == pytest.approx(run.metrics["angle_error_deg"], abs=0.01)
         assert len(run.t) == run.metrics["poses"]
+
+
+@needs_ort
+def test_a_contract_two_model_runs_on_seven_sensors_and_on_six_without_its_optional_chest(tmp_path):
+    """A masked model with an optional chest: the chest silenced in a 7-sensor capture, and the
+    right wrist in a capture of the six (the chest absent throughout); the replays carry the
+    capture's sensors and the gaps are where they were put."""
+    from training import export, sensors as se
+    from training.model import ModelConfig
+    seven = se.DEFAULT_SENSORS + ("chest",)
+    cfg = ModelConfig(32, 32, 1, 32, anchored=True, sensors=seven, optional=("chest",), masked=True)
+    export.export(export.untrained_model(seed=0, config=cfg), tmp_path / "m", check=False)
+    model = tmp_path / "m" / export.FP32_NAME
+    assert de.model_info(model) == (2, seven, ("chest",))
+    assert de.session_sensors_argument(seven) == \
+        "pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=6"
+    common = ["--procedural", "--clips", "1", "--clip-seconds", "10", "--seconds", "2", "--model", str(model)]
+    out7, keep7 = tmp_path / "seven.md", tmp_path / "k7"
+    assert de.main(common + ["--segments", "chest", "--out", str(out7), "--keep", str(keep7)]) == 0
+    text = out7.read_text()
+    assert re.search(r"^\| chest \| [\d.]+ \|", text, re.M), text
+    assert "--sensors" not in text.split("Made by:")[1].split("\n\n")[1]
+    assert "contract 2" in text and "masked (imu_mask 0, zero inputs)" in text
+    truth = np.load(next(next(keep7.iterdir()).glob("*-chest.cap")).with_suffix(".truth.npz"))
+    assert list(truth["sensors"]) == list(seven) and list(truth["silences"]) == ["chest@5.0+2.0"]
+
+    out6 = tmp_path / "six.md"
+    six = ",".join(se.DEFAULT_SENSORS)
+    assert de.main(common + ["--sensors", six, "--segments", "right_wrist", "--out", str(out6)]) == 0
+    text = out6.read_text()
+    assert f"--sensors {six}" in text and "the model's chest is absent throughout (masked)" in text
+    assert re.search(r"^\| right_wrist \| [\d.]+ \|", text, re.M), text
+    assert re.search(r"^\| right_wrist \| 120 of 120 \| 0 \| 0\.000 \|", text, re.M), text
+    with pytest.raises(UsageError, match="is not a sensor of the capture"):
+        de.main(common + ["--sensors", six, "--segments", "chest"])

@@ -530,3 +530,67 @@ def test_re_exporting_the_shipped_checkpoint_reproduces_the_shipped_fp32_model(t
     b = ort.run_onnx(shipped_path, ori, acc)
     for key in export.OUTPUT_NAMES:
         assert np.abs(a[key] - b[key]).max() <= 1e-6, key
+
+
+# ------------------------------------------------------------------------------ evaluate with masks
+def test_a_sensor_missing_from_a_clip_is_masked_as_the_engine_feeds_it_and_the_baseline_rests_its_bone():
+    from training import evaluate as ev
+    clip = ev.synthesize_clip(procedural.make_motion("walk", 1.0, seed=0), np.random.default_rng(0),
+                              sensors=SEVEN)
+    gone = ev.without_sensors(clip, ("chest",))
+    assert gone.mask.shape == clip.imu_orientation.shape[:2]
+    assert (gone.mask[:, CHEST] == 0).all() and (np.delete(gone.mask, CHEST, axis=1) == 1).all()
+    assert not gone.imu_orientation[:, CHEST].any() and not gone.imu_acceleration[:, CHEST].any()
+    assert np.array_equal(gone.imu_orientation[:, :CHEST], clip.imu_orientation[:, :CHEST])
+    chest_bone = se.sensor_bones("hand", SEVEN)[CHEST]
+    with_chest = ev.predict_baseline(clip).local_rot[:, chest_bone]
+    without = ev.predict_baseline(gone).local_rot[:, chest_bone]
+    assert np.abs(with_chest - np.eye(3)).max() > 1e-3          # the chest sensor turns spine3
+    assert np.array_equal(without, np.broadcast_to(np.eye(3), without.shape))
+    with pytest.raises(UsageError, match="not among the clip's sensors"):
+        ev.without_sensors(ev.synthesize_clip(procedural.make_motion("walk", 1.0, seed=0),
+                                              np.random.default_rng(0)), ("chest",))
+
+
+def test_evaluate_refuses_a_missing_sensor_for_a_network_without_the_mask_and_names_bad_absent_lists():
+    from training import evaluate as ev
+    clip = ev.without_sensors(ev.synthesize_clip(procedural.make_motion("walk", 1.0, seed=0),
+                                                 np.random.default_rng(0)), ("head",))
+    with pytest.raises(UsageError, match="no sensor mask"):
+        ev.predict_torch(PoseNet(ModelConfig(16, 8, 1, 16)).eval(), [clip])
+    assert ev.absent_sensors(None, SEVEN) == () and ev.absent_sensors("chest", SEVEN) == ("chest",)
+    with pytest.raises(UsageError, match="chest is not a sensor of the evaluated models"):
+        ev.absent_sensors("chest", se.DEFAULT_SENSORS)
+    with pytest.raises(UsageError, match="the pelvis cannot be missing"):
+        ev.absent_sensors("pelvis", SEVEN)
+    with pytest.raises(UsageError, match="--absent"):
+        ev.absent_sensors("spleen", SEVEN)
+
+
+@needs_ort
+def test_evaluate_scores_a_contract_two_model_with_and_without_its_optional_sensor(chest_run, tmp_path):
+    """The PyTorch network and its ONNX export get the same masked inputs and give the same
+    figures; the chest's absence changes them; a contract-1 model cannot be scored on seven."""
+    from training import evaluate as ev
+    _, model, d, _ = chest_run
+    ckpt = tmp_path / "chest.pt"
+    torch.save({"model": model.net.state_dict(), "config": model.config.to_dict()}, ckpt)
+    motions = [procedural.make_motion(k, 4.0, seed=i) for i, k in enumerate(["walk", "turn"])]
+    onnx_path = d / export.FP32_NAME
+    assert ev.expected_sensors(None, [onnx_path]) == SEVEN and ev.expected_sensors(ckpt) == SEVEN
+    runs = {}
+    for absent in ((), ("chest",)):
+        r = ev.evaluate(motions, [onnx_path], ckpt, tmp_path / f"r{len(absent)}", seed=1, latency=False,
+                        sensors=SEVEN, absent=absent)["results"]
+        assert r["ONNX fp32"]["angle_all"] == pytest.approx(r["PyTorch fp32"]["angle_all"], abs=0.02)
+        assert r["ONNX fp32"]["pos"] == pytest.approx(r["PyTorch fp32"]["pos"], abs=0.02)
+        runs[absent] = r
+    assert abs(runs[()]["PyTorch fp32"]["angle_all"] - runs[("chest",)]["PyTorch fp32"]["angle_all"]) > 1e-3
+    text = (tmp_path / "r1" / "evaluation.md").read_text()
+    assert "Sensors: 6 (pelvis, left_wrist, right_wrist, left_shin, right_shin, head); missing for " \
+           "the whole clip, masked: chest." in text
+    assert "Sensors: 7" in (tmp_path / "r0" / "evaluation.md").read_text()
+    six = tmp_path / "six"
+    export.export(export.untrained_model(seed=0, config=ModelConfig(32, 32, 1, 32)), six, check=False)
+    with pytest.raises(UsageError, match="reads the sensors pelvis,left_wrist,right_wrist,left_shin,right_shin,head"):
+        ev.evaluate(motions[:1], [six / export.FP32_NAME], None, tmp_path / "r6", latency=False, sensors=SEVEN)
