@@ -285,15 +285,22 @@ def session_sensors_argument(sensors) -> str:
     return ",".join(f"{name}={node}" for name, node in zip(sensors, node_ids(sensors)))
 
 
+def replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors=DEFAULT_SENSORS) -> list:
+    """mocapctl replay of a capture of these sensors through the model, against its truth, with
+    the poses and the accuracy figures written to files."""
+    cmd = [str(mocapctl), "replay", str(capture), "--model", str(model), "--truth", str(truth_csv),
+           "--pose-csv", str(poses), "--metrics-json", str(metrics)]
+    if tuple(sensors) != tuple(DEFAULT_SENSORS):
+        cmd += ["--sensors", session_sensors_argument(sensors)]
+    return cmd
+
+
 def replay(mocapctl, capture: Path, truth_csv: Path, model, workdir: Path, stem: str,
            sensors=DEFAULT_SENSORS):
     """mocapctl replay with the model, a session of the capture's sensors: (time_s, flags, root,
     quats, metrics json)."""
     poses, metrics = workdir / f"{stem}.poses.csv", workdir / f"{stem}.metrics.json"
-    cmd = [str(mocapctl), "replay", str(capture), "--model", str(model), "--truth", str(truth_csv),
-           "--pose-csv", str(poses), "--metrics-json", str(metrics)]
-    if tuple(sensors) != tuple(DEFAULT_SENSORS):
-        cmd += ["--sensors", session_sensors_argument(sensors)]
+    cmd = replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors)
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         raise CommandError(f"mocapctl replay {capture.name} failed (status {r.returncode}): "

@@ -23,8 +23,8 @@ SHIPPED_INT8 = MODELS / "mocap_pose_int8.onnx"
 # 30 s, both worlds (enu, nwu):
 #   joint angle error         10.24 - 10.56 deg  (24 joints)
 #   joint position error       6.02 - 6.65 cm    (root-aligned)
-#   root drift over 5 s        0.21 - 0.28 m     (drift-corrected root)
-#   root drift over 10 s       0.41 - 0.55 m
+#   root drift over 5 s        0.21 - 0.29 m     (drift-corrected root)
+#   root drift over 10 s       0.41 - 0.56 m
 # The test capture below (seed 7, 20 s, enu) is deterministic. Each bound is the worst of those
 # seven plus a margin: about 1.5 deg and 1 cm (15 %) for the pose, which a retrained model that
 # is as good as today's stays inside and a wrong axis, mirror or sensor order is far outside;

@@ -180,7 +180,7 @@ namespace Mocap.Imu
         public string onnxRuntimePath = "";
 
         [Header("Solver")]
-        [Tooltip("Planted feet do not slide and stay on the floor.")]
+        [Tooltip("Planted feet hold the root back from sliding and stand on the floor.")]
         public bool driftCorrection = true;
         [Tooltip("Foot-contact probability from which a foot counts as planted.")]
         [Range(0f, 1f)] public float contactThreshold = 0.5f;

@@ -488,7 +488,7 @@ typedef struct mocap_solver_config {
     uint32_t struct_size;
     float contact_threshold;   /* foot_contact probability that counts as planted (0.5) */
     float floor_height;        /* metres, model frame (0) */
-    int32_t drift_correction;  /* 1: planted feet do not slide and stay on the floor (default) */
+    int32_t drift_correction;  /* 1: planted feet curb root sliding, stand on the floor (default) */
     int32_t require_calibration; /* 1: only frames whose model-required sensors are calibrated
                                     are solved (default) */
     /* Output smoothing, a one-euro filter per joint rotation: the cut-off frequency is

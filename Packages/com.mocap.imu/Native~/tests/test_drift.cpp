@@ -19,6 +19,7 @@ drift_params params(int enabled = 1)
     p.floor_height = 0.0;
     p.foot_height[0] = 0.05;   // the foot joint sits 5 cm above its sole at rest
     p.foot_height[1] = 0.05;
+    p.foot_lock = 1.0;         // a full lock unless a test says otherwise
     p.enabled = enabled;
     return p;
 }
@@ -171,5 +172,36 @@ TEST(Drift, DisabledIsPureIntegrationEvenWithContact)
         EXPECT_NEAR(root[0], 0.3 * kDt * i, 1e-9);
         EXPECT_NEAR(root[1], 0.5 - 0.1 * kDt * i, 1e-9);
         EXPECT_NEAR(root[2], 0.2 * kDt * i, 1e-9);
+    }
+}
+
+TEST(Drift, APartialLockTakesBackItsShareOfEachFramesSlip)
+{
+    // The engine's lock: a planted foot the velocity would slide by v * dt per frame slides by
+    // (1 - foot_lock) of that; vertical motion and feet in the air are untouched by it.
+    drift_params p = params();
+    p.foot_lock = DRIFT_FOOT_LOCK;
+    drift_state s;
+    const double start[3] = {0.0, 0.93, 0.0};
+    drift_reset(&s, start);
+    const double v[3] = {0.6, 0.0, -0.3};
+    const double contact[2] = {0.9, 0.9};
+    double feet[2][3], root[3];
+    standing_feet(feet);
+    drift_step(&s, &p, v, contact, feet, root);   // touchdown: pure integration
+    double x0 = root[0], z0 = root[2];
+    for (int i = 1; i <= 60; ++i) {
+        EXPECT_EQ(drift_step(&s, &p, v, contact, feet, root), 1);
+        EXPECT_NEAR(root[0] - x0, (1.0 - DRIFT_FOOT_LOCK) * 0.6 * kDt * i, 1e-12) << i;
+        EXPECT_NEAR(root[2] - z0, (1.0 - DRIFT_FOOT_LOCK) * -0.3 * kDt * i, 1e-12) << i;
+        EXPECT_NEAR(root[1], 0.93, 1e-12);   // soles stay on the floor
+    }
+    // Lock 0: the velocity alone, even with both feet planted (the floor still applies).
+    p.foot_lock = 0.0;
+    drift_reset(&s, start);
+    drift_step(&s, &p, v, contact, feet, root);
+    for (int i = 2; i <= 30; ++i) {
+        drift_step(&s, &p, v, contact, feet, root);
+        EXPECT_NEAR(root[0], 0.6 * kDt * i, 1e-12) << i;
     }
 }

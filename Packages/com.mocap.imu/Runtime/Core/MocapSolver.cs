@@ -28,7 +28,7 @@ namespace Mocap.Imu
         public float ContactThreshold { get; set; }
         /// <summary>Floor height, model frame, metres.</summary>
         public float FloorHeight { get; set; }
-        /// <summary>Planted feet do not slide and stay on the floor.</summary>
+        /// <summary>Planted feet hold the root back from sliding and stand on the floor.</summary>
         public bool DriftCorrection { get; set; }
         /// <summary>Only calibrated frames are solved.</summary>
         public bool RequireCalibration { get; set; }

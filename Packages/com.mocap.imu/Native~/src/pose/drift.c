@@ -20,7 +20,7 @@ int drift_step(drift_state *s, const drift_params *p, const double velocity[3],
     int corrected = 0;
 
     if (p->enabled) {
-        /* 1. Planted feet (in contact now and before) keep last frame's horizontal position. */
+        /* 1. Planted feet (in contact now and before) pull the root back by foot_lock of their slip. */
         double dx = 0.0, dz = 0.0;
         int planted = 0;
         for (int f = 0; f < 2; ++f) {
@@ -30,8 +30,8 @@ int drift_step(drift_state *s, const drift_params *p, const double velocity[3],
             ++planted;
         }
         if (planted > 0) {
-            root[0] += dx / planted;
-            root[2] += dz / planted;
+            root[0] += p->foot_lock * dx / planted;
+            root[2] += p->foot_lock * dz / planted;
             corrected |= fabs(dx) + fabs(dz) > 1e-12;
         }
         /* 2. The lowest foot in contact stands on the floor. */

@@ -551,6 +551,7 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
     s->drift.floor_height = cfg.floor_height;
     s->drift.foot_height[0] = s->sk.foot_height[0];
     s->drift.foot_height[1] = s->sk.foot_height[1];
+    s->drift.foot_lock = DRIFT_FOOT_LOCK;
     s->drift.enabled = cfg.drift_correction != 0;
     *out = s;
     return MOCAP_OK;

@@ -1,0 +1,457 @@
+"""engine-eval: what users get, scored through the engine's whole path.
+
+    python3 -m training engine-eval [--split val | --split test | --bvh DIR | --procedural]
+        [--clips 40] [--clip-seconds 40] [--model M.onnx] [--sensors A,B,...]
+        [--smoothing HZ,BETA ...] [--seed 0] [--out FILE] [--keep DIR]
+
+For each clip (the first --clip-seconds of evenly spaced clips at least MIN_CLIP_S long, enough
+for the 10 s drift windows) synth_capture writes a byte-level capture (calibration prelude,
+realistic noise, random mountings and headings; --sensors: the capture's sensor set, default the
+model's), and `mocapctl replay --model M --truth --pose-csv --metrics-json` runs it through
+decode -> filter -> calibrate -> model -> output filter -> drift correction: once with the raw
+model output (--smoothing 0) and once per output filter setting (default: the engine's own).
+
+Per setting (means over every compared pose of every clip):
+  angle, pos     mocapctl's joint angle error (24 joints) and root-aligned position error
+  jitter         mean |third difference| of the joint positions; "x truth" is its ratio to the
+                 motion capture's own jitter on the same frames (pooled: sum over sum; per
+                 clip: geometric mean of the clips' ratios)
+  lag            the filter's added latency: the delay d (ms) that best aligns the filtered
+                 poses with the raw ones (the mean joint angle between filtered(t) and raw(t - d)
+                 is smallest, d within +-0.5 s; sub-frame by a parabola through the best three),
+                 median over clips, with its spread
+Root drift (m) over windows of 2 / 5 / 10 s starting every second, | predicted - true root
+displacement | at the window's end, pooled over the windows of all clips: of the pose root the
+engine outputs (drift-corrected) and of the integrated root velocity (the model alone); per clip,
+whether the correction helped at 10 s. Foot contacts: precision and recall of the engine's
+planted flags against the truth's (a foot slower than synthesis.CONTACT_SPEED).
+Writes OUT (default training/results/engine.md; training/results/test/engine.md for --split
+test): the tables, the per-clip figures and the command that made it.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shlex
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import skeleton as sk
+from .cli import NON_NEGATIVE_INT, POSITIVE_INT, number_type
+from .errors import CommandError, UsageError
+from .sensors import sensor_list
+
+REPO = Path(__file__).resolve().parent.parent
+RESULTS_DIR = REPO / "training" / "results"
+DRIFT_WINDOWS = (2.0, 5.0, 10.0)
+MIN_CLIP_S = 15.0            # a 10 s drift window needs clips longer than it
+CLIP_S = 40.0
+LEAD_IN_S = 1.0
+RAW = "0"                    # --smoothing 0: the model's raw output
+ENGINE_SMOOTHING = "1,6"     # the engine's default output filter (solver config), as mocapctl prints it
+MAX_LAG_FRAMES = 30          # the lag search goes up to 0.5 s at 60 Hz
+JITTER_GOAL = 1.5            # x the motion capture's own
+
+
+# ------------------------------------------------------------------------------ measures
+def window_drift(times, pred, true, window_s: float) -> list:
+    """Root drift of windows of window_s seconds starting every second (mocapctl's definition):
+    | (pred[end] - pred[start]) - (true[end] - true[start]) |, m, one value per window."""
+    times, pred, true = (np.asarray(a, np.float64) for a in (times, pred, true))
+    out, next_start = [], times[0] if len(times) else 0.0
+    for i in range(len(times)):
+        if times[i] + 1e-9 < next_start:
+            continue
+        next_start = times[i] + 1.0
+        j = int(np.searchsorted(times, times[i] + window_s - 1e-6))
+        if j >= len(times):
+            break
+        out.append(float(np.linalg.norm((pred[j] - pred[i]) - (true[j] - true[i]))))
+    return out
+
+
+def integrated_root(velocity, fps: float) -> np.ndarray:
+    """The root the model's velocity alone gives (no correction), from 0 at the first pose."""
+    v = np.asarray(velocity, np.float64)
+    return np.concatenate([np.zeros((1, 3)), np.cumsum(v[1:], axis=0) / fps]) if len(v) else v
+
+
+def filter_lag_ms(filtered_q, raw_q, fps: float, max_frames: int = MAX_LAG_FRAMES) -> float:
+    """The delay (ms) that best aligns filtered poses with raw ones: the d minimising the mean
+    joint angle between filtered[t] and raw[t - d] (quaternions (T,J,4) of the same poses), d
+    searched from -max_frames to max_frames; sub-frame by a parabola through the best frame and
+    its neighbours."""
+    f, r = np.asarray(filtered_q, np.float64), np.asarray(raw_q, np.float64)
+    n = min(len(f), len(r))
+    max_frames = min(max_frames, n - 2)
+    if max_frames < 1:
+        return math.nan
+    shifts = np.arange(-max_frames, max_frames + 1)
+    cost = np.empty(len(shifts))
+    for i, d in enumerate(shifts):
+        a, b = (f[d:n], r[:n - d]) if d >= 0 else (f[:n + d], r[-d:n])
+        dot = np.abs(np.sum(a * b, axis=-1)).clip(0.0, 1.0)
+        cost[i] = float(np.mean(2.0 * np.arccos(dot)))
+    k = int(np.argmin(cost))
+    shift = float(shifts[k])
+    if 0 < k < len(shifts) - 1:
+        a, b, c = cost[k - 1], cost[k], cost[k + 1]
+        den = a - 2 * b + c
+        if den > 0:
+            shift += 0.5 * (a - c) / den
+    return 1000.0 * shift / fps
+
+
+def contact_quality(flags_contact, truth_contact) -> tuple:
+    """(true positives, predicted planted, truly planted) of (T,2) boolean contact series."""
+    p, t = np.asarray(flags_contact, bool), np.asarray(truth_contact, bool)
+    return int((p & t).sum()), int(p.sum()), int(t.sum())
+
+
+# ------------------------------------------------------------------------------ one clip
+POSE_CONTACT_LEFT, POSE_CONTACT_RIGHT = 1 << 0, 1 << 1   # MOCAP_POSE_CONTACT_* of mocap_imu.h
+
+
+@dataclass
+class Replay:
+    """One replay's poses on the truth's frames."""
+    metrics: dict
+    times: np.ndarray        # (P,) s, session time
+    quats: np.ndarray        # (P,24,4)
+    root: np.ndarray         # (P,3) drift-corrected
+    velocity: np.ndarray     # (P,3)
+    contact: np.ndarray      # (P,2) bool, the engine's planted flags
+    truth_index: np.ndarray  # (P,) the truth frame of each pose
+
+
+@dataclass
+class ClipResult:
+    name: str
+    seconds: float
+    runs: dict = field(default_factory=dict)   # smoothing -> Replay
+    truth_root: np.ndarray | None = None       # (N,3)
+    truth_contact: np.ndarray | None = None    # (N,2) bool
+    fps: float = 60.0
+
+
+def read_replay(poses_csv: Path, metrics_json: Path, truth: dict) -> Replay:
+    with open(poses_csv) as f:
+        header = f.readline().rstrip("\n").split(",")
+    a = np.loadtxt(poses_csv, delimiter=",", skiprows=1, ndmin=2)
+    if a.shape[0] == 0 or header[:4] != ["sequence", "frame_sequence", "time_s", "flags"]:
+        raise CommandError(f"{poses_csv}: not a pose CSV of mocapctl replay, or no poses")
+    col = {name: k for k, name in enumerate(header)}
+    fps, n = float(truth["fps"]), len(truth["root_pos"])
+    x = (a[:, col["time_s"]] - float(truth["t_session_start"])) * fps
+    keep = (x > -1e-3) & (x < n - 1 + 1e-3)
+    if not keep.any():
+        raise CommandError(f"{poses_csv}: no pose falls on the truth's frames")
+    a, x = a[keep], x[keep]
+    flags = a[:, col["flags"]].astype(np.int64)
+    first_q = col["pelvis_qw"]
+    return Replay(json.loads(Path(metrics_json).read_text()), a[:, col["time_s"]],
+                  a[:, first_q:first_q + 96].reshape(-1, 24, 4),
+                  a[:, [col["root_x"], col["root_y"], col["root_z"]]],
+                  a[:, [col["vel_x"], col["vel_y"], col["vel_z"]]],
+                  np.stack([(flags & POSE_CONTACT_LEFT) != 0, (flags & POSE_CONTACT_RIGHT) != 0], -1),
+                  np.clip(np.round(x).astype(int), 0, n - 1))
+
+
+def truth_contacts(truth: dict) -> np.ndarray:
+    """(N,2) the truth's planted feet, as training labels them (synthesis.foot_contact_labels)."""
+    from .synthesis import foot_contact_labels
+    rot = np.asarray(truth["local_rot"], np.float64)
+    _, pos = sk.forward_kinematics(rot, np.asarray(truth["root_pos"], np.float64),
+                                   np.asarray(truth["offsets"], np.float64))
+    return foot_contact_labels(pos, float(truth["fps"])) > 0.5
+
+
+def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: Path, seed: int,
+             mocapctl) -> ClipResult:
+    from .dropout_eval import replay_command
+    from .synth_capture import load_truth, synth_capture
+    import subprocess
+    cap = workdir / f"{index:02d}-{motion.name}.cap"
+    synth_capture(None, cap, motion=motion, seed=seed, world="enu" if index % 2 == 0 else "nwu",
+                  lead_in=LEAD_IN_S, sensors=sensors)
+    truth = load_truth(cap.with_suffix(".truth.npz"))
+    out = ClipResult(motion.name, motion.num_frames / motion.fps, fps=float(truth["fps"]),
+                     truth_root=np.asarray(truth["root_pos"], np.float64),
+                     truth_contact=truth_contacts(truth))
+    for s in (RAW, *[x for x in settings if x != RAW]):
+        tag = "raw" if s == RAW else s.replace(",", "_")
+        poses, metrics = cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json")
+        cmd = replay_command(mocapctl, cap, cap.with_suffix(".truth.csv"), model, poses, metrics,
+                             sensors) + ["--smoothing", s]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise CommandError(f"mocapctl replay {cap.name} --smoothing {s} failed (status "
+                               f"{r.returncode}): " + (r.stderr.strip() or r.stdout.strip()[-500:]))
+        out.runs[s] = read_replay(poses, metrics, truth)
+    return out
+
+
+# ------------------------------------------------------------------------------ summary
+def summarize(clips, settings) -> dict:
+    """Setting -> the figures of the tables (see the module's docstring)."""
+    out = {}
+    for s in (RAW, *settings):
+        if s in out:
+            continue
+        poses = sum(c.runs[s].metrics["poses"] for c in clips)
+
+        def pooled(key):
+            return sum(c.runs[s].metrics[key] * c.runs[s].metrics["poses"] for c in clips) / max(poses, 1)
+        jit, tjit = pooled("jitter_100m_s3"), pooled("truth_jitter_100m_s3")
+        ratios = [c.runs[s].metrics["jitter_100m_s3"] / c.runs[s].metrics["truth_jitter_100m_s3"]
+                  for c in clips if (c.runs[s].metrics.get("truth_jitter_100m_s3") or 0) > 0]
+        lags = [filter_lag_ms(c.runs[s].quats, c.runs[RAW].quats, c.fps) for c in clips] if s != RAW else []
+        row = {"poses": poses, "angle": pooled("angle_error_deg"), "pos": pooled("position_error_cm"),
+               "jitter": jit, "truth_jitter": tjit, "jitter_ratio": jit / tjit if tjit else math.nan,
+               "jitter_ratio_gm": float(np.exp(np.mean(np.log(ratios)))) if ratios else math.nan,
+               "lag_ms": float(np.nanmedian(lags)) if lags else 0.0,
+               "lag_ms_range": (float(np.nanmin(lags)), float(np.nanmax(lags))) if lags else (0.0, 0.0)}
+        tp = pp = tt = 0
+        for w in DRIFT_WINDOWS:
+            corr, integ = [], []
+            for c in clips:
+                r = c.runs[s]
+                true = c.truth_root[r.truth_index]
+                corr += window_drift(r.times, r.root, true, w)
+                integ += window_drift(r.times, integrated_root(r.velocity, c.fps), true, w)
+            row[f"drift_{w:g}s"] = float(np.mean(corr)) if corr else math.nan
+            row[f"drift_{w:g}s_model"] = float(np.mean(integ)) if integ else math.nan
+            row[f"drift_{w:g}s_windows"] = len(corr)
+        helped = []
+        for c in clips:
+            r = c.runs[s]
+            true = c.truth_root[r.truth_index]
+            a = window_drift(r.times, r.root, true, 10.0)
+            b = window_drift(r.times, integrated_root(r.velocity, c.fps), true, 10.0)
+            if a:
+                helped.append(float(np.mean(a)) - float(np.mean(b)))
+            t, p, n = contact_quality(r.contact, c.truth_contact[r.truth_index])
+            tp, pp, tt = tp + t, pp + p, tt + n
+        row["drift_change_per_clip"] = helped
+        row["contact_precision"] = tp / pp if pp else math.nan
+        row["contact_recall"] = tp / tt if tt else math.nan
+        out[s] = row
+    return out
+
+
+# ------------------------------------------------------------------------------ report
+def _fmt(v, digits=2) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return f"{v:.{digits}f}"
+
+
+def _label(s: str) -> str:
+    if s == RAW:
+        return "raw model output (--smoothing 0)"
+    return f"--smoothing {s}" + (" (the engine's default)" if s == ENGINE_SMOOTHING else "")
+
+
+def write_report(path: Path, clips, settings, meta: dict) -> Path:
+    summary = summarize(clips, settings)
+    lines = ["# The engine's whole path: output filter, jitter, drift", "",
+             f"{len(clips)} clips ({meta['source']}, {sum(c.seconds for c in clips):.0f} s of motion), "
+             f"each a byte-level capture of {len(meta['sensors'])} sensors ({', '.join(meta['sensors'])}) "
+             f"replayed by `mocapctl replay` through `{meta['model']}`: decode -> filter -> calibrate -> "
+             f"model -> output filter -> drift correction. Made by:", "",
+             f"    {meta['command']}", "",
+             f"({meta['elapsed_s'] / 60:.1f} min on this machine.) Figures are means over every compared "
+             "pose of every clip; the docstring of `training/engine_eval.py` defines each.", "",
+             "| output | angle (deg) | position (cm) | jitter (10^2 m/s^3) | x truth, pooled | x truth, "
+             "per clip (geo. mean) | added latency ms, median (range) |",
+             "|---|---|---|---|---|---|---|"]
+    for s, v in summary.items():
+        lag = "-" if s == RAW else f"{_fmt(v['lag_ms'], 0)} ({_fmt(v['lag_ms_range'][0], 0)} - {_fmt(v['lag_ms_range'][1], 0)})"
+        lines.append(f"| {_label(s)} | {_fmt(v['angle'])} | {_fmt(v['pos'])} | {_fmt(v['jitter'])} | "
+                     f"{_fmt(v['jitter_ratio'])} | {_fmt(v['jitter_ratio_gm'])} | {lag} |")
+    raw = summary[RAW]
+    lines += ["", f"The motion capture's own jitter on the same frames: {_fmt(raw['truth_jitter'])} x10^2 m/s^3.",
+              "", "## Root drift", "",
+              "| output | drift 2 s (m) | drift 5 s | drift 10 s | the model alone (integrated velocity) 2 / 5 / 10 s "
+              "| correction helped at 10 s (clips) | mean change at 10 s per clip (m) | contacts: precision / recall |",
+              "|---|---|---|---|---|---|---|---|"]
+    for s, v in summary.items():
+        ch = v["drift_change_per_clip"]
+        lines.append(f"| {_label(s)} | {_fmt(v['drift_2s'], 3)} | {_fmt(v['drift_5s'], 3)} | "
+                     f"{_fmt(v['drift_10s'], 3)} | {_fmt(v['drift_2s_model'], 3)} / "
+                     f"{_fmt(v['drift_5s_model'], 3)} / {_fmt(v['drift_10s_model'], 3)} | "
+                     f"{sum(1 for x in ch if x < 0)} of {len(ch)} | "
+                     f"{'%+.3f' % float(np.mean(ch)) if ch else '-'} | "
+                     f"{_fmt(v['contact_precision'])} / {_fmt(v['contact_recall'])} |")
+    first = next(iter(summary.values()))
+    lines += ["", f"Windows: {first['drift_2s_windows']} / {first['drift_5s_windows']} / "
+              f"{first['drift_10s_windows']} of 2 / 5 / 10 s.", ""]
+    lines += findings(summary, settings)
+    lines += ["", "## Per clip (" + _label(settings[0] if settings else RAW) + ")", "",
+              "| clip | seconds | angle (deg) | position (cm) | jitter x truth | drift 10 s (m): engine / model alone |",
+              "|---|---|---|---|---|---|"]
+    s0 = settings[0] if settings else RAW
+    for c in clips:
+        r = c.runs[s0]
+        m = r.metrics
+        true = c.truth_root[r.truth_index]
+        a = window_drift(r.times, r.root, true, 10.0)
+        b = window_drift(r.times, integrated_root(r.velocity, c.fps), true, 10.0)
+        ratio = m["jitter_100m_s3"] / m["truth_jitter_100m_s3"] if m.get("truth_jitter_100m_s3") else math.nan
+        lines.append(f"| {c.name} | {c.seconds:.1f} | {_fmt(m['angle_error_deg'])} | {_fmt(m['position_error_cm'])} | "
+                     f"{_fmt(ratio)} | {_fmt(float(np.mean(a)) if a else math.nan, 3)} / "
+                     f"{_fmt(float(np.mean(b)) if b else math.nan, 3)} |")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    from .files import atomic_write_bytes
+    atomic_write_bytes(("\n".join(lines) + "\n").encode(), path, "the engine report")
+    return path
+
+
+def findings(summary, settings) -> list:
+    """The tables' answers to the goals, computed so that a rerun keeps them true."""
+    raw = summary[RAW]
+    out = ["## What it shows", ""]
+    for s in settings:
+        if s == RAW:
+            continue
+        v = summary[s]
+        out.append(f"- {_label(s)}: jitter {_fmt(v['jitter_ratio'])} x the motion capture's "
+                   f"({'within' if v['jitter_ratio'] <= JITTER_GOAL else 'above'} {JITTER_GOAL:g} x; raw "
+                   f"{_fmt(raw['jitter_ratio'])} x), angle error {v['angle'] - raw['angle']:+.3f} deg and "
+                   f"position {v['pos'] - raw['pos']:+.3f} cm against the raw output, "
+                   f"{_fmt(v['lag_ms'], 0)} ms added latency (median).")
+        ch = v["drift_change_per_clip"]
+        out.append(f"- Drift correction ({_label(s)}): 10 s drift {_fmt(v['drift_10s'], 3)} m against "
+                   f"{_fmt(v['drift_10s_model'], 3)} m for the model's velocity alone; it helped "
+                   f"{sum(1 for x in ch if x < 0)} of {len(ch)} clips, mean change per clip "
+                   f"{'%+.3f' % float(np.mean(ch)) if ch else '-'} m.")
+    return out
+
+
+# ------------------------------------------------------------------------------ command
+def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=None, progress=print) -> list:
+    from .ort import mocapctl_path
+    mocapctl = mocapctl_path(require_onnx=True)
+    clips = []
+    with tempfile.TemporaryDirectory(prefix="engine-eval-") as tmp:
+        root = Path(workdir) if workdir else Path(tmp)
+        root.mkdir(parents=True, exist_ok=True)
+        for i, m in enumerate(motions):
+            t0 = time.monotonic()
+            clips.append(run_clip(m, i, model, settings, sensors, root, seed + i, mocapctl))
+            if progress:
+                progress(f"  {i + 1}/{len(motions)} {m.name}: {len(clips[-1].runs)} replays in "
+                         f"{time.monotonic() - t0:.0f} s")
+    return clips
+
+
+SMOOTHING = number_type(str, lambda v: _smoothing_ok(v), "HZ or HZ,BETA with HZ >= 0 and BETA >= 0")
+
+
+def _smoothing_ok(v: str) -> bool:
+    try:
+        parts = [float(x) for x in v.split(",")]
+    except ValueError:
+        return False
+    return 1 <= len(parts) <= 2 and all(math.isfinite(x) and x >= 0 for x in parts)
+
+
+_SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
+
+
+def add_arguments(p=None):
+    from .dropout_eval import DEFAULT_MODEL
+    p = p or argparse.ArgumentParser(prog="python3 -m training engine-eval",
+                                     description=__doc__.split("\n")[0])
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--split", choices=["train", "val", "test"], default="val",
+                     help="CMU subjects (default val)")
+    src.add_argument("--bvh", help="a folder of BVH clips (or a motion pack) instead")
+    src.add_argument("--procedural", action="store_true", help="the project's procedural motions (no data needed)")
+    p.add_argument("--clips", type=POSITIVE_INT, default=40, help="clips (default 40)")
+    p.add_argument("--clip-seconds", type=_SECONDS, default=CLIP_S,
+                   help=f"cut clips to this length (default {CLIP_S:g}); clips shorter than "
+                        f"{MIN_CLIP_S:g} s (or this) are not used")
+    p.add_argument("--model", default=str(DEFAULT_MODEL), help="the ONNX model (default: the engine's)")
+    p.add_argument("--sensors", default=None, help="the capture's sensors (default: the model's)")
+    p.add_argument("--smoothing", nargs="+", type=SMOOTHING, default=[ENGINE_SMOOTHING],
+                   help=f"output filter settings beside the raw output (default {ENGINE_SMOOTHING}, the engine's)")
+    p.add_argument("--seed", type=NON_NEGATIVE_INT, default=0)
+    p.add_argument("--out", default=None, help="the report (default training/results/engine.md, "
+                   "training/results/test/engine.md for --split test)")
+    p.add_argument("--keep", default=None, help="keep the captures and poses in this folder")
+    return p
+
+
+def _shown(path) -> str:
+    try:
+        return str(Path(path).resolve().relative_to(REPO))
+    except ValueError:
+        return str(path)
+
+
+def main(args=None) -> int:
+    from .dropout_eval import choose_clips, model_info, procedural_clips
+    if args is None or isinstance(args, list):
+        args = add_arguments().parse_args(args)
+    model = Path(args.model)
+    if not model.is_file():
+        raise UsageError(f"--model {args.model}: no such file")
+    contract, model_sensors, optional = model_info(model)
+    try:
+        sensors = sensor_list(args.sensors) if args.sensors else model_sensors
+    except ValueError as e:
+        raise UsageError(f"--sensors: {e}") from e
+    needed = [s for s in model_sensors if s not in optional and s not in sensors]
+    if needed:
+        raise UsageError(f"--sensors: {model.name} needs {', '.join(needed)}")
+    unread = [s for s in sensors if s not in model_sensors]
+    if unread:
+        raise UsageError(f"--sensors: {model.name} does not read {', '.join(unread)}")
+    min_s = min(MIN_CLIP_S, args.clip_seconds)
+    if args.procedural:
+        source = "procedural motions"
+        motions = procedural_clips(args.clips, args.clip_seconds, args.seed)
+    else:
+        from . import dataset
+        source = f"BVH folder {args.bvh}" if args.bvh else f"CMU {args.split} split"
+        motions = choose_clips(dataset.load_motions(Path(args.bvh) if args.bvh else args.split, progress=False),
+                               args.clips, args.clip_seconds, min_s)
+    settings = list(dict.fromkeys(args.smoothing))
+    out = Path(args.out) if args.out else (RESULTS_DIR / "test" / "engine.md"
+                                           if args.split == "test" and not (args.bvh or args.procedural)
+                                           else RESULTS_DIR / "engine.md")
+    print(f"engine-eval: {len(motions)} clips ({source}), {len(sensors)} sensors, model {_shown(model)}, "
+          f"output {', '.join(_label(s) for s in [RAW] + settings)}")
+    started = time.monotonic()
+    clips = run_evaluation(motions, model, settings, sensors, args.seed, args.keep)
+    argv = ["--procedural"] if args.procedural else (["--bvh", args.bvh] if args.bvh else ["--split", args.split])
+    argv += ["--clips", str(args.clips), "--clip-seconds", f"{args.clip_seconds:g}", "--seed", str(args.seed)]
+    if model.resolve() != Path(add_arguments().get_default("model")).resolve():
+        argv += ["--model", _shown(model)]
+    if args.sensors:
+        argv += ["--sensors", args.sensors]
+    if settings != [ENGINE_SMOOTHING]:
+        argv += ["--smoothing", *settings]
+    if args.out:
+        argv += ["--out", _shown(args.out)]
+    meta = {"source": source, "sensors": sensors, "model": _shown(model),
+            "command": "python3 -m training engine-eval " + " ".join(shlex.quote(a) for a in argv),
+            "elapsed_s": time.monotonic() - started}
+    path = write_report(out, clips, settings, meta)
+    for s, v in summarize(clips, settings).items():
+        print(f"{_label(s):44s} angle {_fmt(v['angle'])} deg  pos {_fmt(v['pos'])} cm  jitter x{_fmt(v['jitter_ratio'])} "
+              f"lag {_fmt(v['lag_ms'], 0)} ms  drift 10 s {_fmt(v['drift_10s'], 3)} m (model alone "
+              f"{_fmt(v['drift_10s_model'], 3)})")
+    print(f"engine-eval: wrote {_shown(path)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

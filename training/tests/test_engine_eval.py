@@ -1,0 +1,112 @@
+"""engine-eval: the drift, lag and contact measures on series whose answer is known, and one
+short run through mocapctl whose figures agree with mocapctl's own."""
+import math
+
+import numpy as np
+import pytest
+
+from training import engine_eval as ee
+from training import ort, skeleton as sk
+from training.errors import UsageError
+
+needs_ort = pytest.mark.skipif(not ort.onnx_runtime_available(),
+                               reason="ONNX Runtime not fetched (scripts/fetch_onnxruntime.sh)")
+
+
+def test_window_drift_compares_displacements_over_windows_starting_every_second():
+    t = np.arange(0, 12.0 + 1e-9, 1 / 60.0)
+    true = np.stack([t, np.zeros_like(t), np.zeros_like(t)], -1)       # 1 m/s along x
+    pred = true * 0.9                                                  # 10 % short
+    d = ee.window_drift(t, pred, true, 5.0)
+    assert len(d) == 8                                                 # starts 0..7 s end by 12 s
+    assert np.allclose(d, 0.5, atol=1e-6)
+    assert ee.window_drift(t, true + 3.0, true, 10.0) == pytest.approx([0.0] * 3, abs=1e-12)
+    assert ee.window_drift(t[:30], pred[:30], true[:30], 2.0) == []     # shorter than a window
+
+
+def test_integrated_root_starts_at_zero_and_sums_the_velocity():
+    v = np.tile([[0.6, 0.0, -1.2]], (61, 1))
+    r = ee.integrated_root(v, 60.0)
+    assert np.array_equal(r[0], [0, 0, 0]) and r[60] == pytest.approx([0.6, 0.0, -1.2])
+
+
+def test_the_lag_of_a_delayed_copy_is_its_delay():
+    rng = np.random.default_rng(0)
+    rot = np.cumsum(rng.normal(0, 0.05, (600, 24, 3)), axis=0)             # a wandering pose
+    q = sk.quat_from_rot(_rotvec_to_matrix(rot))
+    for delay in (0, 4, 9):
+        delayed = np.concatenate([np.repeat(q[:1], delay, axis=0), q[:len(q) - delay]])
+        assert ee.filter_lag_ms(delayed, q, 60.0) == pytest.approx(1000 * delay / 60.0, abs=3.0)
+    # a half-frame delay (linear interpolation) lands between frames
+    half = sk.quat_from_rot(_rotvec_to_matrix(np.concatenate([rot[:1], 0.5 * (rot[1:] + rot[:-1])])))
+    assert ee.filter_lag_ms(half, q, 60.0) == pytest.approx(1000 * 0.5 / 60.0, abs=4.0)
+    assert math.isnan(ee.filter_lag_ms(q[:2], q[:2], 60.0))
+
+
+def _rotvec_to_matrix(v):
+    theta = np.linalg.norm(v, axis=-1, keepdims=True)
+    k = v / np.maximum(theta, 1e-12)
+    K = np.zeros(v.shape[:-1] + (3, 3))
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
+    K = K - np.swapaxes(K, -1, -2)
+    th = theta[..., None]
+    return np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K
+
+
+def test_contact_quality_counts_hits_predictions_and_truths():
+    pred = np.array([[1, 0], [1, 1], [0, 0]], bool)
+    true = np.array([[1, 1], [0, 1], [0, 1]], bool)
+    assert ee.contact_quality(pred, true) == (2, 3, 4)
+
+
+def test_bad_options_are_usage_errors(tmp_path):
+    with pytest.raises(UsageError, match="no such file"):
+        ee.main(["--procedural", "--model", str(tmp_path / "none.onnx")])
+    with pytest.raises(SystemExit):
+        ee.main(["--procedural", "--smoothing", "-1"])
+
+
+@needs_ort
+def test_a_short_run_through_mocapctl_agrees_with_mocapctls_own_figures(tmp_path):
+    out, keep = tmp_path / "engine.md", tmp_path / "keep"
+    assert ee.main(["--procedural", "--clips", "2", "--clip-seconds", "16", "--smoothing", "1,6", "3,6",
+                    "--out", str(out), "--keep", str(keep)]) == 0
+    text = out.read_text()
+    assert "python3 -m training engine-eval --procedural --clips 2 --clip-seconds 16 --seed 0 " \
+           "--smoothing 1,6 3,6" in text
+    for row in ("| raw model output (--smoothing 0) |", "| --smoothing 1,6 (the engine's default) |",
+                "| --smoothing 3,6 |"):
+        assert text.count(row) == 2, row          # the filter table and the drift table
+    # This module's drift windows over the replayed poses are mocapctl's (--metrics-json).
+    from training.synth_capture import load_truth
+    import json
+    for cap in sorted(keep.glob("*.cap")):
+        truth = load_truth(cap.with_suffix(".truth.npz"))
+        r = ee.read_replay(cap.with_suffix(".1_6.csv"), cap.with_suffix(".1_6.json"), truth)
+        m = json.loads(cap.with_suffix(".1_6.json").read_text())
+        assert len(r.times) == m["poses"]
+        true = np.asarray(truth["root_pos"], np.float64)[r.truth_index]
+        for w in (2.0, 5.0, 10.0):
+            key = f"{w:g}s"
+            assert np.mean(ee.window_drift(r.times, r.root, true, w)) == pytest.approx(m["root_drift_m"][key], abs=2e-3)
+            assert np.mean(ee.window_drift(r.times, ee.integrated_root(r.velocity, 60.0), true, w)) == \
+                pytest.approx(m["root_drift_integrated_velocity_m"][key], abs=2e-3)
+    # The filter removes jitter and adds latency; a higher cut-off less of both.
+    s = ee.summarize(_clips_from(keep), ["1,6", "3,6"])
+    assert s["1,6"]["jitter"] < s["3,6"]["jitter"] < s["0"]["jitter"]
+    assert s["1,6"]["lag_ms"] >= s["3,6"]["lag_ms"] > 0 and s["0"]["lag_ms"] == 0
+
+
+def _clips_from(keep):
+    """The kept replays as ClipResults, as run_evaluation made them."""
+    from training.synth_capture import load_truth
+    clips = []
+    for cap in sorted(keep.glob("*.cap")):
+        truth = load_truth(cap.with_suffix(".truth.npz"))
+        c = ee.ClipResult(cap.stem, len(truth["root_pos"]) / 60.0, fps=60.0,
+                          truth_root=np.asarray(truth["root_pos"], np.float64),
+                          truth_contact=ee.truth_contacts(truth))
+        for s, tag in (("0", "raw"), ("1,6", "1_6"), ("3,6", "3_6")):
+            c.runs[s] = ee.read_replay(cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json"), truth)
+        clips.append(c)
+    return clips
