@@ -54,7 +54,7 @@ MIN_CLIP_S = 15.0            # a 10 s drift window needs clips longer than it
 CLIP_S = 40.0
 LEAD_IN_S = 1.0
 RAW = "0"                    # --smoothing 0: the model's raw output
-ENGINE_SMOOTHING = "1,6"     # the engine's default output filter (solver config), as mocapctl prints it
+ENGINE_SMOOTHING = "2,12"    # the engine's default output filter (solver config), as mocapctl prints it
 MAX_LAG_FRAMES = 30          # the lag search goes up to 0.5 s at 60 Hz
 JITTER_GOAL = 1.5            # x the motion capture's own
 

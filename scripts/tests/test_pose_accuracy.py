@@ -21,8 +21,8 @@ SHIPPED_INT8 = MODELS / "mocap_pose_int8.onnx"
 # Today's figures (shipped fp32 model, procedural "mixed" motion through training.synth_capture
 # with realistic noise, random mountings and headings), over seven captures: seeds 1-7, 20 s and
 # 30 s, both worlds (enu, nwu):
-#   joint angle error         10.24 - 10.56 deg  (24 joints)
-#   joint position error       6.02 - 6.65 cm    (root-aligned)
+#   joint angle error         10.27 - 10.59 deg  (24 joints)
+#   joint position error       6.05 - 6.69 cm    (root-aligned)
 #   root drift over 5 s        0.21 - 0.29 m     (drift-corrected root)
 #   root drift over 10 s       0.41 - 0.56 m
 # The test capture below (seed 7, 20 s, enu) is deterministic. Each bound is the worst of those

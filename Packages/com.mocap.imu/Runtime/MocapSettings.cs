@@ -189,9 +189,9 @@ namespace Mocap.Imu
         [Tooltip("Only calibrated frames are solved.")]
         public bool requireCalibration = true;
         [Tooltip("Output smoothing: cut-off frequency (Hz) for a joint at rest. Lower is smoother; 0 = off (the model's raw output).")]
-        [Min(0f)] public float smoothingMinCutoffHz = 1f;
+        [Min(0f)] public float smoothingMinCutoffHz = 2f;
         [Tooltip("How much fast motion bypasses the smoothing (Hz per rad/s of joint speed): higher = less lag on fast moves.")]
-        [Min(0f)] public float smoothingBeta = 6f;
+        [Min(0f)] public float smoothingBeta = 12f;
 
         [Header("Characters (one sensor set each)")]
         [Tooltip("One entry per performer: each has its own sensor set and drives its own avatar.")]

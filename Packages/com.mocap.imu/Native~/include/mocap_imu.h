@@ -491,10 +491,11 @@ typedef struct mocap_solver_config {
     int32_t drift_correction;  /* 1: planted feet curb root sliding, stand on the floor (default) */
     int32_t require_calibration; /* 1: only frames whose model-required sensors are calibrated
                                     are solved (default) */
-    /* Output smoothing, a one-euro filter per joint rotation: the cut-off frequency is
-     * smoothing_min_cutoff_hz for a joint at rest and rises by smoothing_beta Hz per rad/s of the
-     * joint's speed, so slow motion loses its jitter and fast motion does not lag.
-     * smoothing_min_cutoff_hz = 0 turns it off (the model's raw output). Defaults 1.0 Hz, 6.0. */
+    /* Output smoothing, a one-euro filter per joint rotation that follows each joint's turning
+     * rate: the cut-off frequency is smoothing_min_cutoff_hz for a joint at rest and rises by
+     * smoothing_beta Hz per rad/s of the joint's speed, so slow motion loses its jitter and fast
+     * motion does not lag. smoothing_min_cutoff_hz = 0 turns it off (the model's raw output).
+     * Defaults 2.0 Hz, 12.0. */
     float smoothing_min_cutoff_hz;
     float smoothing_beta;
 } mocap_solver_config;

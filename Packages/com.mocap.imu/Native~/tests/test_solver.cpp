@@ -885,8 +885,8 @@ TEST_F(SolverOnShippedModel, ConfigIsValidated)
     EXPECT_FLOAT_EQ(c.contact_threshold, 0.5f);
     EXPECT_EQ(c.drift_correction, 1);
     EXPECT_EQ(c.require_calibration, 1);
-    EXPECT_FLOAT_EQ(c.smoothing_min_cutoff_hz, 1.0f);
-    EXPECT_FLOAT_EQ(c.smoothing_beta, 6.0f);
+    EXPECT_FLOAT_EQ(c.smoothing_min_cutoff_hz, 2.0f);
+    EXPECT_FLOAT_EQ(c.smoothing_beta, 12.0f);
     mocap_solver *s = nullptr;
     c.contact_threshold = 1.5f;
     EXPECT_EQ(mocap_solver_open(model.m, &c, &s), MOCAP_ERR_INVALID_ARGUMENT);

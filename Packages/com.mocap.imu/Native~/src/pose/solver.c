@@ -486,8 +486,8 @@ mocap_status mocap_solver_config_defaults(mocap_solver_config *c)
     c->floor_height = 0.0f;
     c->drift_correction = 1;
     c->require_calibration = 1;
-    c->smoothing_min_cutoff_hz = 1.0f;
-    c->smoothing_beta = 6.0f;
+    c->smoothing_min_cutoff_hz = 2.0f;
+    c->smoothing_beta = 12.0f;
     return MOCAP_OK;
 }
 
@@ -547,6 +547,7 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
     s->smoothing.min_cutoff_hz = cfg.smoothing_min_cutoff_hz;
     s->smoothing.beta = cfg.smoothing_beta;
     s->smoothing.speed_cutoff_hz = 1.0;
+    s->smoothing.trend_gain = POSE_FILTER_TREND_GAIN;
     s->drift.contact_threshold = cfg.contact_threshold;
     s->drift.floor_height = cfg.floor_height;
     s->drift.foot_height[0] = s->sk.foot_height[0];

@@ -73,7 +73,7 @@ static const mocapctl_command COMMANDS[] = {
      "  --pose-csv POSES.csv one CSV line per pose\n"
      "  --metrics-json ACCURACY.json  with a pose truth: the accuracy figures as JSON\n"
      "  --smoothing HZ[,BETA]  the output filter's cut-off at rest and its rise per rad/s\n"
-     "                       (default 1,6; 0 = the model's raw output)\n"
+     "                       (default 2,12; 0 = the model's raw output)\n"
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
      cmd_replay},
@@ -86,7 +86,7 @@ static const mocapctl_command COMMANDS[] = {
      "  --record CAPTURE     keep every byte in a capture file\n"
      "  --seconds S          stop after S seconds\n"
      "  --model M, --pose    run the pose model (--pose: the shipped one) and show pose status\n"
-     "  --smoothing HZ[,BETA]  the output filter (default 1,6; 0 = off)\n"
+     "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off)\n"
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
      cmd_live},
@@ -115,7 +115,7 @@ static const mocapctl_command COMMANDS[] = {
      "  --rate HZ            at most this many bundles per second (default 60)\n"
      "  --seconds S          stop after S seconds\n"
      "  --allow-remote       allow destinations that are not this machine\n"
-     "  --smoothing HZ[,BETA]  the output filter (default 1,6; 0 = off)\n"
+     "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off)\n"
      SENSOR_SET_HELP
      "                       the sensors the model does not require are optional\n",
      cmd_stream},

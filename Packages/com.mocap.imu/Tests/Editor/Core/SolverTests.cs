@@ -463,21 +463,27 @@ namespace Mocap.Imu.Tests
         public void SmoothingSettingsReachTheEngine()
         {
             var defaults = new SolverConfig();
-            Assert.AreEqual(1f, defaults.SmoothingMinCutoffHz);
-            Assert.AreEqual(6f, defaults.SmoothingBeta);
+            Assert.AreEqual(2f, defaults.SmoothingMinCutoffHz);
+            Assert.AreEqual(12f, defaults.SmoothingBeta);
             var raw = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingMinCutoffHz = 0f });
             var strong = SolverReplay.SolveOneCharacter(_capture, _model,
                 new SolverConfig { SmoothingMinCutoffHz = 0.5f, SmoothingBeta = 0.5f });
             Assert.AreEqual(_poses.Count, raw.Count);
             Assert.AreEqual(_poses.Count, strong.Count);
-            // frame-to-frame rotation of every joint, summed: the jitter a viewer sees; the
-            // defaults (the fixture's poses) sit between raw and strong smoothing
+            // how much every joint's frame-to-frame turn changes from one frame to the next,
+            // summed: the jitter a viewer sees (a steady turn scores 0, so the filter's trend,
+            // which follows turns, is not counted as jitter); the defaults (the fixture's poses)
+            // sit between raw and strong smoothing
             double Motion(List<MocapPose> poses)
             {
                 double sum = 0;
-                for (int i = 1; i < poses.Count; i++)
+                for (int i = 2; i < poses.Count; i++)
                     for (int j = 0; j < MocapPose.JointCount; j++)
-                        sum += Quat.Angle(poses[i].GetJointRotation(j), poses[i - 1].GetJointRotation(j));
+                    {
+                        Quat now = poses[i].GetJointRotation(j) * poses[i - 1].GetJointRotation(j).Inverse;
+                        Quat before = poses[i - 1].GetJointRotation(j) * poses[i - 2].GetJointRotation(j).Inverse;
+                        sum += Quat.Angle(now, before);
+                    }
                 return sum;
             }
             double r = Motion(raw), d = Motion(_poses), s = Motion(strong);
