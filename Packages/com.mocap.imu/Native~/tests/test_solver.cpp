@@ -1215,6 +1215,21 @@ TEST(SolverSensorSets, MaskFollowsEachSensorsState)
     const int8_t no_chest[7] = {0, 1, 2, 3, 4, 5, -1};
     ASSERT_EQ(solver_frame_input(&f, no_chest, 7, 1, ori, acc, mask), 0);
     EXPECT_EQ(mask[6], 0.0f);
+    // A silent pelvis keeps its held value and mask 1; a silent wrist is masked.
+    f = calibrated_six_frame();
+    f.sensors[0].bone_acceleration[2] = 3.0f;
+    for (int s : {0, 1}) {
+        f.sensors[s].state = MOCAP_SENSOR_SILENT;
+        f.sensors[s].flags |= MOCAP_SENSOR_HELD | MOCAP_SENSOR_STALE;
+    }
+    ASSERT_EQ(solver_frame_input(&f, slots, 6, 1, ori, acc, mask), 0);
+    EXPECT_EQ(mask[0], 1.0f);
+    EXPECT_EQ(acc[2], 3.0f);
+    EXPECT_EQ(mask[1], 0.0f);
+    EXPECT_EQ(ori[9], 0.0f);
+    f.sensors[0].flags &= ~(uint32_t)MOCAP_SENSOR_CALIBRATED;   // but never uncalibrated
+    ASSERT_EQ(solver_frame_input(&f, slots, 6, 1, ori, acc, mask), 0);
+    EXPECT_EQ(mask[0], 0.0f);
 }
 
 // An extra sensor in the session changes nothing for a contract-1 model: the same capture solved

@@ -109,9 +109,14 @@ int solver_frame_input(const mocap_frame *f, const int8_t *slot_of, int sensors,
         /* Contract 1 has no way to say "missing": its sensors are all required, so a slot
          * always exists and a silent sensor is fed its held value, as the frame carries it. */
         int present = sf != NULL;
-        if (with_mask && sf)
-            present = (sf->flags & MOCAP_SENSOR_CALIBRATED) &&
-                      (sf->state == MOCAP_SENSOR_FRESH || sf->state == MOCAP_SENSOR_HOLDING);
+        if (with_mask && sf) {
+            /* The pelvis sets the frame the model reads every other sensor in: no model can do
+             * without it, so a silent pelvis is fed its held value, as contract 1 feeds every
+             * silent sensor, rather than inputs the model never learnt to read. */
+            const int live = sf->state == MOCAP_SENSOR_FRESH || sf->state == MOCAP_SENSOR_HOLDING ||
+                             (sf->state == MOCAP_SENSOR_SILENT && sf->segment == MOCAP_SEGMENT_PELVIS);
+            present = (sf->flags & MOCAP_SENSOR_CALIBRATED) && live;
+        }
         if (mask) mask[k] = present ? 1.0f : 0.0f;
         if (!present) {
             memset(orientation + k * 9, 0, 9 * sizeof(float));
