@@ -543,6 +543,45 @@ def without_root_jumps(motions) -> tuple:
     return kept, [m.name for m in dropped]
 
 
+# Faster than any limb: a hand at the end of a punch or a throw reaches 10-15 m/s, and 30 cm in one
+# 60 Hz frame is 18 m/s. A joint that jumps further is a marker swap or a dropped marker in the
+# source capture (a few dozen CMU training clips have such frames, some dance and martial arts).
+MAX_JOINT_STEP_M = 0.30   # per 1/60 s
+MIN_PIECE_S = 2.0         # pieces of a cut clip shorter than this are left out
+
+
+def joint_jumps(motion) -> np.ndarray:
+    """Indices i of the frame steps i -> i+1 in which some joint (world position) moves further
+    than MAX_JOINT_STEP_M per 1/60 s."""
+    _, pos = sk.forward_kinematics(np.asarray(motion.local_rot, np.float64),
+                                   np.asarray(motion.root_pos, np.float64),
+                                   np.asarray(motion.offsets, np.float64))
+    step = np.linalg.norm(np.diff(pos, axis=0), axis=-1).max(axis=-1) * (motion.fps / 60.0)
+    return np.nonzero(step > MAX_JOINT_STEP_M)[0]
+
+
+def cut_at_joint_jumps(motions) -> tuple:
+    """(the motions with every clip that has joint jumps cut into the pieces between them,
+    pieces shorter than MIN_PIECE_S left out; the names of the clips cut; frames left out)."""
+    out, cut, lost = [], [], 0
+    for m in motions:
+        jumps = joint_jumps(m)
+        if len(jumps) == 0:
+            out.append(m)
+            continue
+        cut.append(m.name)
+        edges = [0] + [int(i) + 1 for i in jumps] + [m.num_frames]
+        kept = 0
+        for k, (a, b) in enumerate(zip(edges[:-1], edges[1:])):
+            if (b - a) / m.fps < MIN_PIECE_S:
+                continue
+            out.append(sk.Motion(f"{m.name}#{k}", m.subject, m.fps, m.local_rot[a:b], m.root_pos[a:b],
+                                 m.offsets))
+            kept += b - a
+        lost += m.num_frames - kept
+    return out, cut, lost
+
+
 def validation_set(motions, cfg: TrainConfig, sensors=DEFAULT_SENSORS, optional=None) -> list:
     """Deterministic: evenly spaced clips, no augmentation, at most val_max_frames each, of the
     network's sensors. optional: a masked network's optional sensors (None: no mask): every
@@ -799,6 +838,14 @@ def train(cfg: TrainConfig, motions=None, val_motions=None) -> dict:
               f"(capture glitches): {', '.join(jumping[:10])}{' ...' if len(jumping) > 10 else ''}")
         if not motions:
             raise UsageError("every training clip has root jumps; nothing left to train on")
+    motions, cut, lost = cut_at_joint_jumps(motions)
+    if cut:
+        print(f"train: {len(cut)} clips cut where a joint jumps more than {100 * MAX_JOINT_STEP_M:g} cm "
+              f"in one 60 Hz frame (capture glitches; {lost} frames left out): "
+              f"{', '.join(cut[:10])}{' ...' if len(cut) > 10 else ''}")
+        if not motions:
+            raise UsageError("every training clip is cut to pieces under "
+                             f"{MIN_PIECE_S:g} s by joint jumps; nothing left to train on")
     step, total, history, best = 0, cfg.steps, {"train": [], "val": []}, None
     if ck is not None:
         # The network exactly as saved: its anchoring, wrist placement and dropout are the run's

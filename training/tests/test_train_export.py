@@ -708,3 +708,34 @@ def test_the_shipped_models_say_where_their_weights_come_from():
         label = meta["mocap.model_name"]
         assert label.startswith("mocap-pose lstm"), label
         assert "None" not in label and not label.endswith("?"), f"{path}: {label}"
+
+
+def _with_joint_jump(motion, at):
+    """The motion with the left hip turned 90 deg for the one frame `at` (a swapped marker: the
+    left leg jumps out and back)."""
+    rot = motion.local_rot.copy()
+    c, s = 0.0, 1.0
+    rot[at, 1] = rot[at, 1] @ np.array([[1, 0, 0], [0, c, -s], [0, s, c]], np.float32)
+    return sk.Motion(motion.name + "_glitch", motion.subject, motion.fps, rot, motion.root_pos, motion.offsets)
+
+
+def test_clips_are_cut_where_a_joint_jumps_and_short_pieces_left_out(capsys, tmp_path):
+    clean = [procedural.make_motion(procedural.KINDS[i], seconds=6.0, seed=i) for i in range(2)]
+    T = clean[0].num_frames
+    assert all(len(tr.joint_jumps(m)) == 0 for m in clean)     # a walk's feet never move 30 cm a frame
+    glitch = _with_joint_jump(clean[0], 200)
+    assert tr.joint_jumps(glitch).tolist() == [199, 200]
+    out, cut, lost = tr.cut_at_joint_jumps(clean + [glitch])
+    assert cut == [glitch.name] and lost == 1                  # the glitch frame itself
+    pieces = [m for m in out if m.name.startswith(glitch.name)]
+    assert [m.name for m in pieces] == [glitch.name + "#0", glitch.name + "#2"]
+    assert np.array_equal(pieces[0].local_rot, glitch.local_rot[:200])
+    assert np.array_equal(pieces[1].root_pos, glitch.root_pos[201:]) and pieces[1].num_frames == T - 201
+    # a glitch 1 s from the start leaves a piece under MIN_PIECE_S, which is left out
+    early = _with_joint_jump(clean[1], 60)
+    out, cut, lost = tr.cut_at_joint_jumps([early])
+    assert [m.name for m in out] == [early.name + "#2"] and lost == 61
+    s = tr.train(_tiny_config(tmp_path), clean + [glitch], clean[:1])
+    assert "1 clips cut where a joint jumps more than 30 cm in one 60 Hz frame (capture glitches; 1 " \
+           f"frames left out): {glitch.name}" in capsys.readouterr().out
+    assert s["train_clips"] == len(clean) + 2          # the glitched clip trains as its two pieces
