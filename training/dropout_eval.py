@@ -832,7 +832,8 @@ def main(args=None) -> int:
                      f"{', '.join(left_out)} is absent throughout (masked).")
     if contract >= 2:
         notes.append("The model is of contract 2: the engine holds a silent sensor's last sample "
-                     "briefly, then feeds it masked (imu_mask 0, zero inputs) until it returns.")
+                     "briefly, then feeds it masked (imu_mask 0, zero inputs) until it returns; a "
+                     "silent pelvis keeps its held value (every model reads the body in its frame).")
     if contract == 1:
         notes.append("The model is of contract 1 (no `imu_mask`): the engine feeds a silent "
                      "sensor's last held orientation and acceleration until it returns (a contract 2 "

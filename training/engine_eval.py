@@ -34,6 +34,7 @@ import argparse
 import json
 import math
 import shlex
+import subprocess
 import sys
 import tempfile
 import time
@@ -176,7 +177,6 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
              mocapctl) -> ClipResult:
     from .dropout_eval import replay_command
     from .synth_capture import load_truth, synth_capture
-    import subprocess
     cap = workdir / f"{index:02d}-{motion.name}.cap"
     synth_capture(None, cap, motion=motion, seed=seed, world="enu" if index % 2 == 0 else "nwu",
                   lead_in=LEAD_IN_S, sensors=sensors)
