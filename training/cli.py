@@ -30,6 +30,22 @@ POSITIVE = number_type(float, lambda v: v > 0, "a positive number")
 NON_NEGATIVE = number_type(float, lambda v: v >= 0, "a number >= 0")
 
 
+def sensor_option(text, option: str, among=None, of: str = "") -> tuple:
+    """A comma-separated list of segment names given to `option` (sensors.sensor_list), each
+    one of `among` when that is given (`of` names what `among` is, for the message)."""
+    from .sensors import sensor_list
+    try:
+        names = tuple(sensor_list(text))
+    except ValueError as e:
+        raise UsageError(f"{option}: {e}") from e
+    if among is not None:
+        unknown = [n for n in names if n not in among]
+        if unknown:
+            raise UsageError(f"{option}: {', '.join(unknown)} is not a sensor of {of} "
+                             f"({', '.join(among)})")
+    return names
+
+
 def require_file(path, option: str) -> Path:
     p = Path(path)
     if not p.exists():

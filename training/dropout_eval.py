@@ -54,9 +54,9 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
-from .cli import POSITIVE_INT, NON_NEGATIVE_INT, number_type
+from .cli import POSITIVE_INT, NON_NEGATIVE_INT, number_type, sensor_option
 from .errors import CommandError, UsageError
-from .sensors import DEFAULT_SENSORS, node_ids, sensor_bones, sensor_list
+from .sensors import DEFAULT_SENSORS, node_ids, sensor_bones
 
 REPO = Path(__file__).resolve().parent.parent
 MODELS_DIR = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
@@ -720,21 +720,71 @@ def model_info(model) -> tuple:
     """(contract version, sensor segments, optional segments) a model declares, as `mocapctl
     model-info` reads them (the engine refuses a model that breaks the contract: a CommandError
     here)."""
-    from .ort import mocapctl_path
-    r = subprocess.run([str(mocapctl_path(require_onnx=True)), "model-info", str(model)],
-                       capture_output=True, text=True)
-    if r.returncode != 0:
-        raise CommandError(f"mocapctl model-info {model}: {r.stderr.strip() or r.stdout.strip()}")
-    fields = {}
-    for line in r.stdout.splitlines():
-        parts = line.split()
-        if len(parts) >= 2:
-            fields.setdefault(parts[0], parts[1])
-    if "contract_version" not in fields or "sensor_order" not in fields:
+    from .ort import OnnxRuntimeError, model_info as read_model_info
+    try:
+        info = read_model_info(model)
+    except OnnxRuntimeError as e:
+        raise CommandError(f"mocapctl model-info {model}: {e}") from e
+    if "contract_version" not in info or "sensor_order" not in info:
         raise CommandError(f"mocapctl model-info {model}: no contract_version or sensor_order line")
-    optional = fields.get("optional", "none")
-    return (int(fields["contract_version"]), tuple(fields["sensor_order"].split(",")),
-            () if optional == "none" else tuple(optional.split(",")))
+    return (int(info["contract_version"]), tuple(info["sensor_order"].split(",")),
+            tuple(info.get("optional", [])))
+
+
+def capture_sensors(model: Path, text) -> tuple:
+    """(contract, the model's sensors, its optional ones, the capture's sensors): --sensors (text;
+    default the model's), which must hold every sensor the model requires and none it does not
+    read."""
+    contract, model_sensors, optional = model_info(model)
+    sensors = sensor_option(text, "--sensors") if text else model_sensors
+    needed = [s for s in model_sensors if s not in optional and s not in sensors]
+    if needed:
+        raise UsageError(f"--sensors: {model.name} needs {', '.join(needed)} (it can do without "
+                         f"{', '.join(optional) or 'none of its sensors'})")
+    unread = [s for s in sensors if s not in model_sensors]
+    if unread:
+        raise UsageError(f"--sensors: {model.name} does not read {', '.join(unread)} "
+                         f"({', '.join(model_sensors)})")
+    return contract, model_sensors, optional, sensors
+
+
+def add_source_arguments(p, splits, clips: int, clip_s: float, min_s: float) -> None:
+    """Where a command's clips come from (--split / --bvh / --procedural), how many, how long."""
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--split", choices=splits, default="val",
+                     help=f"CMU subjects, {' / '.join(splits)} (default val)")
+    src.add_argument("--bvh", help="a folder of BVH clips (or a motion pack) instead")
+    src.add_argument("--procedural", action="store_true",
+                     help="the project's procedural motions instead (no data needed)")
+    p.add_argument("--clips", type=POSITIVE_INT, default=clips, help=f"clips (default {clips})")
+    p.add_argument("--clip-seconds", type=_SECONDS, default=clip_s,
+                   help=f"cut clips to this length (default {clip_s:g}); only clips of at least "
+                        f"{min_s:g} s (or this, if shorter) are used")
+
+
+def load_clips(args, min_s: float) -> tuple:
+    """(the source in words, the motions) of add_source_arguments' options."""
+    if args.procedural:
+        return "procedural motions", procedural_clips(args.clips, args.clip_seconds, args.seed)
+    from . import dataset
+    source = f"BVH folder {args.bvh}" if args.bvh else f"CMU {args.split} split"
+    return source, choose_clips(dataset.load_motions(Path(args.bvh) if args.bvh else args.split,
+                                                     progress=False),
+                                args.clips, args.clip_seconds, min_s)
+
+
+def report_path(args, name: str) -> Path:
+    """--out, else training/results/NAME (training/results/test/NAME for the test split)."""
+    if args.out:
+        return Path(args.out)
+    test = args.split == "test" and not (args.bvh or args.procedural)
+    return (RESULTS_DIR / "test" if test else RESULTS_DIR) / name
+
+
+def source_argv(args) -> list:
+    """add_source_arguments' options as typed, for the report's command line."""
+    out = ["--procedural"] if args.procedural else (["--bvh", args.bvh] if args.bvh else ["--split", args.split])
+    return out + ["--clips", str(args.clips), "--clip-seconds", f"{args.clip_seconds:g}"]
 
 
 _SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
@@ -743,16 +793,7 @@ _SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
 def add_arguments(p=None):
     p = p or argparse.ArgumentParser(prog="python3 -m training missing-sensor",
                                      description=__doc__.split("\n")[0])
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--split", choices=["val", "test"], default="val",
-                     help="CMU validation or test subjects (default val)")
-    src.add_argument("--bvh", help="a folder of BVH clips (or a motion pack) instead")
-    src.add_argument("--procedural", action="store_true",
-                     help="the project's procedural motions instead (no data needed)")
-    p.add_argument("--clips", type=POSITIVE_INT, default=15, help="clips (default 15)")
-    p.add_argument("--clip-seconds", type=_SECONDS, default=CLIP_S,
-                   help=f"cut clips to this length (default {CLIP_S:g}); only clips of at least "
-                        f"{MIN_CLIP_S:g} s (or this, if shorter) are used")
+    add_source_arguments(p, ["val", "test"], 15, CLIP_S, MIN_CLIP_S)
     p.add_argument("--seconds", type=_SECONDS, default=GAP_S,
                    help=f"how long the sensor is silent (default {GAP_S:g})")
     p.add_argument("--model", default=str(DEFAULT_MODEL), help="the ONNX model (default: the shipped "
@@ -782,43 +823,15 @@ def main(args=None) -> int:
     model = Path(args.model)
     if not model.is_file():
         raise UsageError(f"--model {args.model}: no such file")
-    contract, model_sensors, optional = model_info(model)
-    try:
-        sensors = sensor_list(args.sensors) if getattr(args, "sensors", None) else model_sensors
-    except ValueError as e:
-        raise UsageError(f"--sensors: {e}") from e
-    needed = [s for s in model_sensors if s not in optional and s not in sensors]
-    if needed:
-        raise UsageError(f"--sensors: {model.name} needs {', '.join(needed)} (it can do without "
-                         f"{', '.join(optional) or 'none of its sensors'})")
-    unread = [s for s in sensors if s not in model_sensors]
-    if unread:
-        raise UsageError(f"--sensors: {model.name} does not read {', '.join(unread)} "
-                         f"({', '.join(model_sensors)})")
-    try:
-        segments = sensor_list(args.segments) if args.segments else sensors
-    except ValueError as e:
-        raise UsageError(f"--segments: {e}") from e
-    missing = [s for s in segments if s not in sensors]
-    if missing:
-        raise UsageError(f"--segments: {', '.join(missing)} is not a sensor of the capture "
-                         f"({', '.join(sensors)})")
+    contract, model_sensors, optional, sensors = capture_sensors(model, getattr(args, "sensors", None))
+    segments = (sensor_option(args.segments, "--segments", sensors, "the capture") if args.segments
+                else sensors)
     min_s = min(MIN_CLIP_S, args.clip_seconds)
     if min_s < args.seconds + 2 * RECOVERY_WINDOW_S:
         raise UsageError(f"--clip-seconds {args.clip_seconds:g} leaves no room for a {args.seconds:g} s "
                          f"gap with {RECOVERY_WINDOW_S:g} s on either side")
-    if args.procedural:
-        source = "procedural motions"
-        motions = procedural_clips(args.clips, args.clip_seconds, args.seed)
-    else:
-        from . import dataset
-        source = f"BVH folder {args.bvh}" if args.bvh else f"CMU {args.split} split"
-        motions = choose_clips(dataset.load_motions(Path(args.bvh) if args.bvh else args.split,
-                                                    progress=False),
-                               args.clips, args.clip_seconds, min_s)
-    out = Path(args.out) if args.out else (RESULTS_DIR / "test" / "missing_sensor.md"
-                                           if args.split == "test" and not (args.bvh or args.procedural)
-                                           else RESULTS_DIR / "missing_sensor.md")
+    source, motions = load_clips(args, min_s)
+    out = report_path(args, "missing_sensor.md")
     print(f"missing-sensor: {len(motions)} clips ({source}) x {1 + len(segments)} conditions, "
           f"{args.seconds:g} s gaps, model {_shown(model)} (contract {contract})")
     started = time.monotonic()
@@ -856,9 +869,7 @@ def main(args=None) -> int:
 def _argv_of(args) -> list:
     """The options that decide the report, written out (paths relative to the repository), so
     the report says how to make it again."""
-    out = ["--procedural"] if args.procedural else (["--bvh", args.bvh] if args.bvh else ["--split", args.split])
-    out += ["--clips", str(args.clips), "--clip-seconds", f"{args.clip_seconds:g}", "--seconds",
-            f"{args.seconds:g}", "--seed", str(args.seed)]
+    out = source_argv(args) + ["--seconds", f"{args.seconds:g}", "--seed", str(args.seed)]
     if Path(args.model).resolve() != DEFAULT_MODEL.resolve():
         out += ["--model", _shown(args.model)]
     if getattr(args, "sensors", None):

@@ -44,12 +44,9 @@ from pathlib import Path
 import numpy as np
 
 from . import skeleton as sk
-from .cli import NON_NEGATIVE_INT, POSITIVE_INT, number_type
+from .cli import NON_NEGATIVE_INT, number_type
 from .errors import CommandError, UsageError
-from .sensors import sensor_list
 
-REPO = Path(__file__).resolve().parent.parent
-RESULTS_DIR = REPO / "training" / "results"
 DRIFT_WINDOWS = (2.0, 5.0, 10.0)
 MIN_CLIP_S = 15.0            # a 10 s drift window needs clips longer than it
 CLIP_S = 40.0
@@ -140,6 +137,12 @@ class ClipResult:
     truth_contact: np.ndarray | None = None    # (N,2) bool
     fps: float = 60.0
 
+    @classmethod
+    def from_truth(cls, name: str, seconds: float, truth: dict) -> "ClipResult":
+        """A clip with no replay yet, its truth's root and planted feet."""
+        return cls(name, seconds, fps=float(truth["fps"]),
+                   truth_root=np.asarray(truth["root_pos"], np.float64), truth_contact=truth_contacts(truth))
+
 
 def read_replay(poses_csv: Path, metrics_json: Path, truth: dict) -> Replay:
     with open(poses_csv) as f:
@@ -181,9 +184,7 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
     synth_capture(None, cap, motion=motion, seed=seed, world="enu" if index % 2 == 0 else "nwu",
                   lead_in=LEAD_IN_S, sensors=sensors)
     truth = load_truth(cap.with_suffix(".truth.npz"))
-    out = ClipResult(motion.name, motion.num_frames / motion.fps, fps=float(truth["fps"]),
-                     truth_root=np.asarray(truth["root_pos"], np.float64),
-                     truth_contact=truth_contacts(truth))
+    out = ClipResult.from_truth(motion.name, motion.num_frames / motion.fps, truth)
     for s in (RAW, *[x for x in settings if x != RAW]):
         tag = "raw" if s == RAW else s.replace(",", "_")
         poses, metrics = cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json")
@@ -198,6 +199,16 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
 
 
 # ------------------------------------------------------------------------------ summary
+def clip_drift(clip, setting) -> dict:
+    """Window -> (drift windows of the engine's corrected root, of the model's velocity alone) of
+    one clip's replay with this output setting."""
+    r = clip.runs[setting]
+    true = clip.truth_root[r.truth_index]
+    model_root = integrated_root(r.velocity, clip.fps)
+    return {w: (window_drift(r.times, r.root, true, w), window_drift(r.times, model_root, true, w))
+            for w in DRIFT_WINDOWS}
+
+
 def summarize(clips, settings) -> dict:
     """Setting -> the figures of the tables (see the module's docstring)."""
     out = {}
@@ -217,28 +228,22 @@ def summarize(clips, settings) -> dict:
                "jitter_ratio_gm": float(np.exp(np.mean(np.log(ratios)))) if ratios else math.nan,
                "lag_ms": float(np.nanmedian(lags)) if lags else 0.0,
                "lag_ms_range": (float(np.nanmin(lags)), float(np.nanmax(lags))) if lags else (0.0, 0.0)}
-        tp = pp = tt = 0
+        drifts = [clip_drift(c, s) for c in clips]
         for w in DRIFT_WINDOWS:
-            corr, integ = [], []
-            for c in clips:
-                r = c.runs[s]
-                true = c.truth_root[r.truth_index]
-                corr += window_drift(r.times, r.root, true, w)
-                integ += window_drift(r.times, integrated_root(r.velocity, c.fps), true, w)
+            corr = [x for d in drifts for x in d[w][0]]
+            integ = [x for d in drifts for x in d[w][1]]
             row[f"drift_{w:g}s"] = float(np.mean(corr)) if corr else math.nan
             row[f"drift_{w:g}s_model"] = float(np.mean(integ)) if integ else math.nan
             row[f"drift_{w:g}s_windows"] = len(corr)
-        helped = []
+        # per clip: mean 10 s drift of the engine's root and of the model alone
+        row["drift_10s_per_clip"] = [(float(np.mean(d[10.0][0])) if d[10.0][0] else math.nan,
+                                      float(np.mean(d[10.0][1])) if d[10.0][1] else math.nan) for d in drifts]
+        row["drift_change_per_clip"] = [a - b for a, b in row["drift_10s_per_clip"] if not math.isnan(a)]
+        tp = pp = tt = 0
         for c in clips:
             r = c.runs[s]
-            true = c.truth_root[r.truth_index]
-            a = window_drift(r.times, r.root, true, 10.0)
-            b = window_drift(r.times, integrated_root(r.velocity, c.fps), true, 10.0)
-            if a:
-                helped.append(float(np.mean(a)) - float(np.mean(b)))
             t, p, n = contact_quality(r.contact, c.truth_contact[r.truth_index])
             tp, pp, tt = tp + t, pp + p, tt + n
-        row["drift_change_per_clip"] = helped
         row["contact_precision"] = tp / pp if pp else math.nan
         row["contact_recall"] = tp / tt if tt else math.nan
         out[s] = row
@@ -258,8 +263,8 @@ def _label(s: str) -> str:
     return f"--smoothing {s}" + (" (the engine's default)" if s == ENGINE_SMOOTHING else "")
 
 
-def write_report(path: Path, clips, settings, meta: dict) -> Path:
-    summary = summarize(clips, settings)
+def write_report(path: Path, clips, settings, meta: dict, summary: dict) -> Path:
+    """The report of summarize()'s figures (summary) for these clips."""
     lines = ["# The engine's whole path: output filter, jitter, drift", "",
              f"{len(clips)} clips ({meta['source']}, {sum(c.seconds for c in clips):.0f} s of motion), "
              f"each a byte-level capture of {len(meta['sensors'])} sensors ({', '.join(meta['sensors'])}) "
@@ -297,16 +302,11 @@ def write_report(path: Path, clips, settings, meta: dict) -> Path:
               "| clip | seconds | angle (deg) | position (cm) | jitter x truth | drift 10 s (m): engine / model alone |",
               "|---|---|---|---|---|---|"]
     s0 = settings[0] if settings else RAW
-    for c in clips:
-        r = c.runs[s0]
-        m = r.metrics
-        true = c.truth_root[r.truth_index]
-        a = window_drift(r.times, r.root, true, 10.0)
-        b = window_drift(r.times, integrated_root(r.velocity, c.fps), true, 10.0)
+    for c, (a, b) in zip(clips, summary[s0]["drift_10s_per_clip"]):
+        m = c.runs[s0].metrics
         ratio = m["jitter_100m_s3"] / m["truth_jitter_100m_s3"] if m.get("truth_jitter_100m_s3") else math.nan
         lines.append(f"| {c.name} | {c.seconds:.1f} | {_fmt(m['angle_error_deg'])} | {_fmt(m['position_error_cm'])} | "
-                     f"{_fmt(ratio)} | {_fmt(float(np.mean(a)) if a else math.nan, 3)} / "
-                     f"{_fmt(float(np.mean(b)) if b else math.nan, 3)} |")
+                     f"{_fmt(ratio)} | {_fmt(a, 3)} / {_fmt(b, 3)} |")
     path.parent.mkdir(parents=True, exist_ok=True)
     from .files import atomic_write_bytes
     atomic_write_bytes(("\n".join(lines) + "\n").encode(), path, "the engine report")
@@ -362,22 +362,11 @@ def _smoothing_ok(v: str) -> bool:
     return 1 <= len(parts) <= 2 and all(math.isfinite(x) and x >= 0 for x in parts)
 
 
-_SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
-
-
 def add_arguments(p=None):
-    from .dropout_eval import DEFAULT_MODEL
+    from .dropout_eval import DEFAULT_MODEL, add_source_arguments
     p = p or argparse.ArgumentParser(prog="python3 -m training engine-eval",
                                      description=__doc__.split("\n")[0])
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--split", choices=["train", "val", "test"], default="val",
-                     help="CMU subjects (default val)")
-    src.add_argument("--bvh", help="a folder of BVH clips (or a motion pack) instead")
-    src.add_argument("--procedural", action="store_true", help="the project's procedural motions (no data needed)")
-    p.add_argument("--clips", type=POSITIVE_INT, default=40, help="clips (default 40)")
-    p.add_argument("--clip-seconds", type=_SECONDS, default=CLIP_S,
-                   help=f"cut clips to this length (default {CLIP_S:g}); clips shorter than "
-                        f"{MIN_CLIP_S:g} s (or this) are not used")
+    add_source_arguments(p, ["train", "val", "test"], 40, CLIP_S, MIN_CLIP_S)
     p.add_argument("--model", default=str(DEFAULT_MODEL), help="the ONNX model (default: the engine's)")
     p.add_argument("--sensors", default=None, help="the capture's sensors (default: the model's)")
     p.add_argument("--smoothing", nargs="+", type=SMOOTHING, default=[ENGINE_SMOOTHING],
@@ -389,50 +378,22 @@ def add_arguments(p=None):
     return p
 
 
-def _shown(path) -> str:
-    try:
-        return str(Path(path).resolve().relative_to(REPO))
-    except ValueError:
-        return str(path)
-
-
 def main(args=None) -> int:
-    from .dropout_eval import choose_clips, model_info, procedural_clips
+    from .dropout_eval import _shown, capture_sensors, load_clips, report_path, source_argv
     if args is None or isinstance(args, list):
         args = add_arguments().parse_args(args)
     model = Path(args.model)
     if not model.is_file():
         raise UsageError(f"--model {args.model}: no such file")
-    contract, model_sensors, optional = model_info(model)
-    try:
-        sensors = sensor_list(args.sensors) if args.sensors else model_sensors
-    except ValueError as e:
-        raise UsageError(f"--sensors: {e}") from e
-    needed = [s for s in model_sensors if s not in optional and s not in sensors]
-    if needed:
-        raise UsageError(f"--sensors: {model.name} needs {', '.join(needed)}")
-    unread = [s for s in sensors if s not in model_sensors]
-    if unread:
-        raise UsageError(f"--sensors: {model.name} does not read {', '.join(unread)}")
-    min_s = min(MIN_CLIP_S, args.clip_seconds)
-    if args.procedural:
-        source = "procedural motions"
-        motions = procedural_clips(args.clips, args.clip_seconds, args.seed)
-    else:
-        from . import dataset
-        source = f"BVH folder {args.bvh}" if args.bvh else f"CMU {args.split} split"
-        motions = choose_clips(dataset.load_motions(Path(args.bvh) if args.bvh else args.split, progress=False),
-                               args.clips, args.clip_seconds, min_s)
+    sensors = capture_sensors(model, args.sensors)[3]
+    source, motions = load_clips(args, min(MIN_CLIP_S, args.clip_seconds))
     settings = list(dict.fromkeys(args.smoothing))
-    out = Path(args.out) if args.out else (RESULTS_DIR / "test" / "engine.md"
-                                           if args.split == "test" and not (args.bvh or args.procedural)
-                                           else RESULTS_DIR / "engine.md")
+    out = report_path(args, "engine.md")
     print(f"engine-eval: {len(motions)} clips ({source}), {len(sensors)} sensors, model {_shown(model)}, "
           f"output {', '.join(_label(s) for s in [RAW] + settings)}")
     started = time.monotonic()
     clips = run_evaluation(motions, model, settings, sensors, args.seed, args.keep)
-    argv = ["--procedural"] if args.procedural else (["--bvh", args.bvh] if args.bvh else ["--split", args.split])
-    argv += ["--clips", str(args.clips), "--clip-seconds", f"{args.clip_seconds:g}", "--seed", str(args.seed)]
+    argv = source_argv(args) + ["--seed", str(args.seed)]
     if model.resolve() != Path(add_arguments().get_default("model")).resolve():
         argv += ["--model", _shown(model)]
     if args.sensors:
@@ -444,8 +405,9 @@ def main(args=None) -> int:
     meta = {"source": source, "sensors": sensors, "model": _shown(model),
             "command": "python3 -m training engine-eval " + " ".join(shlex.quote(a) for a in argv),
             "elapsed_s": time.monotonic() - started}
-    path = write_report(out, clips, settings, meta)
-    for s, v in summarize(clips, settings).items():
+    summary = summarize(clips, settings)
+    path = write_report(out, clips, settings, meta, summary)
+    for s, v in summary.items():
         print(f"{_label(s):44s} angle {_fmt(v['angle'])} deg  pos {_fmt(v['pos'])} cm  jitter x{_fmt(v['jitter_ratio'])} "
               f"lag {_fmt(v['lag_ms'], 0)} ms  drift 10 s {_fmt(v['drift_10s'], 3)} m (model alone "
               f"{_fmt(v['drift_10s_model'], 3)})")

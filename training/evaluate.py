@@ -42,7 +42,7 @@ import numpy as np
 
 from . import skeleton as sk
 from .sensors import DEFAULT_SENSORS, WRIST_SENSOR_PLACES, sensor_bones
-from .cli import NON_NEGATIVE_INT, POSITIVE_INT, number_type
+from .cli import NON_NEGATIVE_INT, POSITIVE_INT, number_type, sensor_option
 from .errors import CommandError, UsageError
 
 REPO = Path(__file__).resolve().parent.parent
@@ -853,15 +853,7 @@ def absent_sensors(text, sensors) -> tuple:
     """--absent: segment names among `sensors`, never the pelvis (every model needs it)."""
     if not text:
         return ()
-    from .sensors import sensor_list
-    try:
-        absent = tuple(sensor_list(text))
-    except ValueError as e:
-        raise UsageError(f"--absent: {e}") from e
-    unknown = [a for a in absent if a not in sensors]
-    if unknown:
-        raise UsageError(f"--absent: {', '.join(unknown)} is not a sensor of the evaluated models "
-                         f"({', '.join(sensors)})")
+    absent = sensor_option(text, "--absent", sensors, "the evaluated models")
     if "pelvis" in absent:
         raise UsageError("--absent: the pelvis cannot be missing (every model needs it)")
     return absent

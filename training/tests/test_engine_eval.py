@@ -104,9 +104,7 @@ def _clips_from(keep):
     clips = []
     for cap in sorted(keep.glob("*.cap")):
         truth = load_truth(cap.with_suffix(".truth.npz"))
-        c = ee.ClipResult(cap.stem, len(truth["root_pos"]) / 60.0, fps=60.0,
-                          truth_root=np.asarray(truth["root_pos"], np.float64),
-                          truth_contact=ee.truth_contacts(truth))
+        c = ee.ClipResult.from_truth(cap.stem, len(truth["root_pos"]) / 60.0, truth)
         for s, tag in (("0", "raw"), ("2,12", "2_12"), ("6,12", "6_12")):
             c.runs[s] = ee.read_replay(cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json"), truth)
         clips.append(c)
