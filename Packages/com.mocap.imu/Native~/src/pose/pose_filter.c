@@ -26,20 +26,6 @@ static void quat_to_rotation_vector(double out[3], const double q[4])
     for (int k = 0; k < 3; ++k) out[k] = sign * q[k + 1] * scale;
 }
 
-static void quat_from_rotation_vector(double out[4], const double v[3])
-{
-    double angle = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (angle < 1e-12) {
-        out[0] = 1.0;
-        out[1] = 0.5 * v[0];
-        out[2] = 0.5 * v[1];
-        out[3] = 0.5 * v[2];
-        quat_normalize(out);
-        return;
-    }
-    quat_from_axis_angle(out, v, angle);
-}
-
 void pose_filter_step(pose_filter_state *s, const pose_filter_params *p, double q[][4], int n)
 {
     if (n > POSE_FILTER_MAX_JOINTS) n = POSE_FILTER_MAX_JOINTS;
@@ -62,7 +48,7 @@ void pose_filter_step(pose_filter_state *s, const pose_filter_params *p, double 
         if (trend > 0.0) {
             double step[3], turn[4];
             for (int k = 0; k < 3; ++k) step[k] = s->velocity[j][k] * p->dt;
-            quat_from_rotation_vector(turn, step);
+            quat_from_axis_angle(turn, step, vec3_norm(step));   /* identity for no turn */
             quat_multiply(predicted, turn, s->q[j]);
             quat_normalize(predicted);
         } else {
