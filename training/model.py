@@ -34,8 +34,10 @@ Only export-friendly ops are used (matmul, slicing, elementwise, LSTM, no atan2)
 """
 from __future__ import annotations
 
+import functools
 import numbers
 from dataclasses import dataclass, asdict, replace
+from typing import NamedTuple
 
 import torch
 import torch.nn as nn
@@ -85,6 +87,36 @@ def _index(x: torch.Tensor, dim: int, idx: list) -> torch.Tensor:
     if idx == list(range(idx[0], idx[0] + len(idx))):
         return x.narrow(dim, idx[0], len(idx))
     return x.index_select(dim, torch.tensor(idx, device=x.device))
+
+
+class _AnchorPlan(NamedTuple):
+    sensors: list      # input index of each anchored sensor (the pelvis is never re-anchored)
+    joints: list       # its bone
+    levels: list       # forward kinematics below the root: (joints, index of each one's parent
+                       # in the level above) per tree depth, only the joints the parents need
+    parent_at: list    # each bone's parent in the levels (root first) laid end to end
+    order: list        # the 24 joints from [network rotations, anchored rotations]
+
+
+@functools.lru_cache(maxsize=None)
+def _anchor_plan(anchors: tuple) -> _AnchorPlan:
+    """How _anchor_sensor_bones batches the sensor bones `anchors` (a joint per sensor)."""
+    picked = {j: s for s, j in enumerate(anchors) if j != 0}      # the last sensor of a bone wins
+    joints = sorted(picked, key=picked.get)
+    sensors = [picked[j] for j in joints]
+    parents = [PARENTS[j] for j in joints]
+    needed = set(parents) | _ancestors(parents)
+    depth = {0: 0}
+    for j in range(1, NUM_JOINTS):
+        depth[j] = depth[PARENTS[j]] + 1
+    laid, levels = [[0]], []
+    for d in range(1, max((depth[j] for j in needed), default=0) + 1):
+        level = sorted(j for j in needed if depth[j] == d)
+        levels.append((level, [laid[-1].index(PARENTS[j]) for j in level]))
+        laid.append(level)
+    flat = [j for level in laid for j in level]
+    order = [NUM_JOINTS + joints.index(j) if j in picked else j for j in range(NUM_JOINTS)]
+    return _AnchorPlan(sensors, joints, levels, [flat.index(p) for p in parents], order)
 
 
 @dataclass
@@ -193,30 +225,88 @@ def check_attention_dims(embed: int, heads: int, window: int) -> None:
         raise ValueError(f"window {window}: a frame must see at least one frame before it")
 
 
+# The network writes each joint's 6D rotation as column 0 then column 1: this gather lays the
+# 144 values out as (joint, row, column), so a reshape gives the columns without a transpose.
+_COLUMN_ORDER = [j * 6 + c * 3 + r for j in range(NUM_JOINTS) for r in range(3) for c in range(2)]
+
 DEFAULT_CONFIG = ModelConfig()
 STATE_LAYERS = DEFAULT_CONFIG.layers
 STATE_SIZE = DEFAULT_CONFIG.hidden
 
 
+# ----------------------------------------------------------------------------- graph economy
+# A frame of the exported model is a few hundred microseconds at most, and ONNX Runtime pays a
+# fixed price per operator, so the helpers below keep the graph small: shapes that copy their
+# leading dimensions (ONNX Reshape's 0) instead of computing them, one Split instead of slices
+# at a run-time batch size. Outside an export they are the plain PyTorch operations.
+class _ReshapeTail(torch.autograd.Function):
+    @staticmethod
+    def forward(ctx, x, keep, tail):
+        return x.reshape(tuple(x.shape[:keep]) + tuple(tail))
+
+    @staticmethod
+    def symbolic(g, x, keep, tail):
+        tail = list(tail)
+        if -1 not in tail:   # the exporter's shape inference needs a -1 beside the 0s
+            tail[0] = -1
+        shape = torch.tensor([0] * keep + tail, dtype=torch.int64)
+        return g.op("Reshape", x, g.op("Constant", value_t=shape))
+
+
+class _Halves(torch.autograd.Function):
+    @staticmethod
+    def forward(ctx, x, dim):
+        n = x.shape[dim] // 2
+        return x.narrow(dim, 0, n), x.narrow(dim, n, n)
+
+    @staticmethod
+    def symbolic(g, x, dim):
+        return g.op("Split", x, axis_i=dim, outputs=2)
+
+
+def _reshape_tail(x: torch.Tensor, keep: int, tail) -> torch.Tensor:
+    """x.reshape(x.shape[:keep] + tail); tail may hold one -1."""
+    if torch.onnx.is_in_onnx_export():
+        return _ReshapeTail.apply(x, keep, tuple(tail))
+    return x.reshape(tuple(x.shape[:keep]) + tuple(tail))
+
+
+def _halves(x: torch.Tensor, dim: int) -> tuple:
+    """x's first and second half along dim (of even length)."""
+    if torch.onnx.is_in_onnx_export():
+        return _Halves.apply(x, dim)
+    n = x.shape[dim] // 2
+    return x.narrow(dim, 0, n), x.narrow(dim, n, n)
+
+
 # ----------------------------------------------------------------------------- rotation helpers
-def _norm(v: torch.Tensor, eps: float = 1e-8) -> torch.Tensor:
-    return torch.sqrt((v * v).sum(-1, keepdim=True) + eps)
+def _norm(v: torch.Tensor, dim: int = -1, eps: float = 1e-8) -> torch.Tensor:
+    return torch.sqrt((v * v).sum(dim, keepdim=True) + eps)
 
 
-def _cross(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-    ax, ay, az = a[..., 0:1], a[..., 1:2], a[..., 2:3]
-    bx, by, bz = b[..., 0:1], b[..., 1:2], b[..., 2:3]
-    return torch.cat([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], dim=-1)
+# a x b = a[yzx] * b[zxy] - a[zxy] * b[yzx], the rows gathered in those orders
+_YZX, _ZXY = [1, 2, 0], [2, 0, 1]
+
+
+def _gram_schmidt(cols: torch.Tensor) -> torch.Tensor:
+    """(..., 3, 2) two columns -> (..., 3, 3) rotation: the first column normalised, the second
+    made orthogonal to it and normalised, the third their cross product."""
+    a1, a2 = cols[..., 0:1], cols[..., 1:2]
+    b1 = a1 / _norm(a1, -2)
+    b2 = a2 - (b1 * a2).sum(-2, keepdim=True) * b1
+    b2 = b2 / _norm(b2, -2)
+    b3 = b1[..., _YZX, :] * b2[..., _ZXY, :] - b1[..., _ZXY, :] * b2[..., _YZX, :]
+    return torch.cat([b1, b2, b3], dim=-1)
+
+
+def rot6d_columns(x: torch.Tensor) -> torch.Tensor:
+    """(..., 6) = (column 0, column 1) -> the two columns (..., 3, 2)."""
+    return _reshape_tail(x, x.dim() - 1, (2, 3)).transpose(-1, -2)
 
 
 def rot6d_to_matrix(x: torch.Tensor) -> torch.Tensor:
     """(..., 6) = (column 0, column 1) -> (..., 3, 3) rotation by Gram-Schmidt."""
-    a1, a2 = x[..., 0:3], x[..., 3:6]
-    b1 = a1 / _norm(a1)
-    b2 = a2 - (b1 * a2).sum(-1, keepdim=True) * b1
-    b2 = b2 / _norm(b2)
-    b3 = _cross(b1, b2)
-    return torch.stack([b1, b2, b3], dim=-1)
+    return _gram_schmidt(rot6d_columns(x))
 
 
 def matrix_to_rot6d(m: torch.Tensor) -> torch.Tensor:
@@ -224,21 +314,20 @@ def matrix_to_rot6d(m: torch.Tensor) -> torch.Tensor:
     return torch.cat([m[..., :, 0], m[..., :, 1]], dim=-1)
 
 
+# Ry(heading) = s * _RY_BASIS[0] + c * _RY_BASIS[1] + _RY_UP, (s, c) the normalised (x, z) of h
+_RY_BASIS = torch.tensor([[[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]],
+                          [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]])
+_RY_UP = torch.tensor([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]])
+
+
 def heading_rotation(pelvis: torch.Tensor) -> torch.Tensor:
-    """Ry(heading) of pelvis orientations (..., 3, 3), built without atan2."""
-    f = pelvis[..., :, 2]
-    u = pelvis[..., :, 1]
-    hx = f[..., 0] - f[..., 1] * u[..., 0]
-    hz = f[..., 2] - f[..., 1] * u[..., 2]
-    n = torch.sqrt(hx * hx + hz * hz + 1e-8)
-    s = hx / n
-    c = hz / n
-    z = torch.zeros_like(c)
-    o = torch.ones_like(c)
-    rows = [torch.stack([c, z, s], dim=-1),
-            torch.stack([z, o, z], dim=-1),
-            torch.stack([-s, z, c], dim=-1)]
-    return torch.stack(rows, dim=-2)
+    """Ry(heading) of pelvis orientations (..., 3, 3), built without atan2 as a weighted sum of
+    constant matrices."""
+    xz = pelvis[..., [0, 2], :]                                   # rows x and z: (..., 2, 3)
+    h = xz[..., 2] - pelvis[..., 1:2, 2] * xz[..., 1]             # f_xz - f_y * u_xz
+    sc = h / _norm(h)                                             # (sin, cos) of the heading
+    basis = _RY_BASIS.to(pelvis.dtype)
+    return (sc[..., None, None] * basis).sum(-3) + _RY_UP.to(pelvis.dtype)
 
 
 def forward_kinematics_torch(local_rot: torch.Tensor, offsets: torch.Tensor, parents) -> tuple:
@@ -371,9 +460,15 @@ class PoseNet(nn.Module):
         with torch.no_grad():
             self.head[-1].weight.mul_(0.01)
             self.head[-1].bias.zero_()
-        ident = torch.tensor([1.0, 0.0, 0.0, 0.0, 1.0, 0.0])
-        self.register_buffer("identity6d", ident, persistent=False)
         self.register_buffer("identity3", torch.eye(3), persistent=False)
+        # what each joint's predicted columns are residuals on: the measured pelvis for joint 0
+        # (pelvis_only picks it), the rest pose for the others
+        rest = torch.eye(3)[:, :2].repeat(NUM_JOINTS, 1, 1)
+        rest[0] = 0.0
+        self.register_buffer("rest_columns", rest, persistent=False)
+        pelvis_only = torch.zeros(NUM_JOINTS, 1, 1)
+        pelvis_only[0] = 1.0
+        self.register_buffer("pelvis_only", pelvis_only, persistent=False)
 
     @property
     def required_flags(self) -> list:
@@ -440,69 +535,56 @@ class PoseNet(nn.Module):
 
     def features(self, ori: torch.Tensor, acc: torch.Tensor, mask: torch.Tensor | None = None) -> tuple:
         """ori (B,T,N,3,3), acc (B,T,N,3) (and for a masked network mask (B,T,N)) -> (features
-        (B,T,feature_size), Ry (B,T,3,3), the N orientations in the heading frame (B,T,N,3,3))."""
+        (B,T,feature_size), Ry (B,T,3,3), the N orientations in the heading frame (B,T,N,3,3)).
+
+        A masked network reads a missing sensor as identity orientation and zero acceleration (so
+        the heading and the relative rotations stay rotations), zeroes its feature blocks (so its
+        placeholder says nothing) and appends the mask."""
+        p = self.pelvis
         if self.config.masked:
-            return self._masked_features(ori, acc, mask)
-        p = self.pelvis
+            m4 = mask.unsqueeze(-1)                                # (B,T,N,1)
+            m5 = m4.unsqueeze(-1)                                  # (B,T,N,1,1)
+            ori = ori * m5 + self.identity3 * (1.0 - m5)
+            acc = acc * m4
         r0 = ori[:, :, p]
         ry = heading_rotation(r0)
-        ryt = ry.transpose(-1, -2).unsqueeze(2)
-        rg = ryt @ ori                                             # (B,T,N,3,3)
-        ag = (ryt @ acc.unsqueeze(-1)).squeeze(-1)                 # (B,T,N,3)
-        r0t = r0.transpose(-1, -2).unsqueeze(2)
-        rrel = r0t @ _index(ori, 2, self.others)                   # (B,T,N-1,3,3)
-        arel = (r0t @ (_index(acc, 2, self.others) - acc[:, :, p:p + 1]).unsqueeze(-1)).squeeze(-1)
-        feat = torch.cat([rg.flatten(2), ag.flatten(2) / ACC_SCALE,
-                          rrel.flatten(2), arel.flatten(2) / ACC_SCALE], dim=-1)
-        return feat, ry, rg
+        rg = ry.transpose(-1, -2).unsqueeze(2) @ ori               # Ry^T R_i (B,T,N,3,3)
+        ag = acc @ ry                                              # rows: Ry^T a_i (B,T,N,3)
+        rrel = r0.transpose(-1, -2).unsqueeze(2) @ _index(ori, 2, self.others)
+        arel = (_index(acc, 2, self.others) - acc[:, :, p:p + 1]) @ r0
+        blocks = [rg, ag / ACC_SCALE, rrel, arel / ACC_SCALE]
+        if self.config.masked:
+            m_rel = (_index(mask, 2, self.others) * mask[:, :, p:p + 1])[..., None]   # both ends
+            blocks = [rg * m5, blocks[1] * m4, rrel * m_rel[..., None], blocks[3] * m_rel]
+        feat = [_reshape_tail(x, 2, (-1,)) for x in blocks]
+        if self.config.masked:
+            feat.append(mask)
+        return torch.cat(feat, dim=-1), ry, rg
 
-    def _masked_features(self, ori, acc, mask) -> tuple:
-        """features() of a masked network: a missing sensor reads as identity orientation and
-        zero acceleration (so the heading and the relative rotations stay rotations), its feature
-        blocks are zeroed (so its placeholder says nothing), and the mask is appended."""
-        p = self.pelvis
-        m4 = mask.unsqueeze(-1)                                    # (B,T,N,1)
-        m5 = m4.unsqueeze(-1)                                      # (B,T,N,1,1)
-        ori = ori * m5 + self.identity3 * (1.0 - m5)
-        acc = acc * m4
-        r0 = ori[:, :, p]
-        ry = heading_rotation(r0)
-        ryt = ry.transpose(-1, -2).unsqueeze(2)
-        rg = ryt @ ori
-        ag = (ryt @ acc.unsqueeze(-1)).squeeze(-1)
-        r0t = r0.transpose(-1, -2).unsqueeze(2)
-        rrel = r0t @ _index(ori, 2, self.others)
-        arel = (r0t @ (_index(acc, 2, self.others) - acc[:, :, p:p + 1]).unsqueeze(-1)).squeeze(-1)
-        m_rel = _index(mask, 2, self.others) * mask[:, :, p:p + 1]   # both ends of the relation
-        feat = torch.cat([(rg * m5).flatten(2), (ag * m4).flatten(2) / ACC_SCALE,
-                          (rrel * m_rel[..., None, None]).flatten(2),
-                          (arel * m_rel[..., None]).flatten(2) / ACC_SCALE, mask], dim=-1)
-        return feat, ry, rg
-
-    def _anchor_sensor_bones(self, rot, rot6, rg, mask=None):
+    def _anchor_sensor_bones(self, rot, cols, rg, mask=None) -> tuple:
         """Re-predicts the local rotation of each non-pelvis sensor bone as a residual on the one
         its sensor measures: parent_global^T * sensor_orientation, the parent's global rotation
         from forward kinematics of the predicted ancestors (heading frame). A network with a zero
         residual reproduces the measured bone orientation exactly; training learns how far to
-        trust it (calibration error) against the rest of the body."""
-        anchors = self.anchor_joints
-        ancestors = _ancestors([j for j in anchors if j != 0])
-        glob = {0: rot[:, :, 0]}
-        for j in range(1, NUM_JOINTS):
-            if j in ancestors:
-                glob[j] = glob[PARENTS[j]] @ rot[:, :, j]
-        cols = [rot[:, :, j] for j in range(NUM_JOINTS)]
-        for s, j in enumerate(anchors):
-            if j == 0:
-                continue
-            measured = glob[PARENTS[j]].transpose(-1, -2) @ rg[:, :, s]
-            if mask is None:
-                cols[j] = rot6d_to_matrix(rot6[:, :, j] + matrix_to_rot6d(measured))
-            else:   # a missing sensor measures nothing: its bone is a residual on the rest pose
-                present = mask[:, :, s:s + 1]
-                base = matrix_to_rot6d(measured) * present + self.identity6d * (1.0 - present)
-                cols[j] = rot6d_to_matrix(rot6[:, :, j] + base)
-        return torch.stack(cols, dim=2)
+        trust it (calibration error) against the rest of the body. rot (B,T,24,3,3) the
+        network's rotations, cols (B,T,24,3,2) its residual columns. Returns (the anchored
+        rotations (B,T,K,3,3), their K joints). Every bone is handled in one batch and the
+        kinematics run a level of the tree at a time (a few dozen operators once exported)."""
+        plan = _anchor_plan(tuple(self.anchor_joints))
+        if not plan.sensors:
+            return None, []
+        levels = [rot[:, :, 0:1]]
+        for joints, parents in plan.levels:
+            above = levels[-1]
+            if above.shape[2] != 1 and parents != list(range(above.shape[2])):
+                above = _index(above, 2, parents)
+            levels.append(above @ _index(rot, 2, joints))
+        parent_global = _index(torch.cat(levels, dim=2), 2, plan.parent_at)
+        measured = parent_global.transpose(-1, -2) @ _index(rg, 2, plan.sensors)[..., 0:2]
+        if mask is not None:   # a missing sensor measures nothing: its bone is a residual on the rest pose
+            present = _index(mask, 2, plan.sensors)[..., None, None]
+            measured = measured * present + self.rest_columns[1] * (1.0 - present)
+        return _gram_schmidt(_index(cols, 2, plan.joints) + measured), plan.joints
 
     def _checked_mask(self, ori, mask):
         """The mask a masked network runs with (all present when None); a ValueError for a mask
@@ -521,7 +603,7 @@ class PoseNet(nn.Module):
     def forward_raw(self, ori, acc, state=None, mask=None):
         """Returns (joint_rotations, root_velocity, contact_logits, (h, c)). mask (B,T,N): a
         masked network's present sensors (None: all)."""
-        b, t = ori.shape[0], ori.shape[1]
+        b = ori.shape[0]
         mask = self._checked_mask(ori, mask)
         feat, ry, rg = self.features(ori, acc, mask)
         p = self.config.dropout if self.training else 0.0
@@ -537,14 +619,21 @@ class PoseNet(nn.Module):
         if p > 0:
             y = torch.nn.functional.dropout(y, p, True)
         out = self.head(y)
-        rot6 = out[..., :NUM_JOINTS * 6].reshape(b, t, NUM_JOINTS, 6)
-        base0 = matrix_to_rot6d(rg[:, :, self.pelvis]).unsqueeze(2)     # (B,T,1,6)
-        base = torch.cat([base0, self.identity6d.expand(b, t, NUM_JOINTS - 1, 6)], dim=2)
-        rot = rot6d_to_matrix(rot6 + base)
+        cols = _reshape_tail(out[..., _COLUMN_ORDER], 2, (NUM_JOINTS, 3, 2))
+        base = self.rest_columns + rg[:, :, self.pelvis:self.pelvis + 1, :, 0:2] * self.pelvis_only
+        rot = _gram_schmidt(cols + base)
+        # the output is gathered from [network rotations, anchored bones, pelvis rotated back
+        # out of the heading frame] in one operation
+        pieces, order = [rot], list(range(NUM_JOINTS))
         if self.config.anchored:
-            rot = self._anchor_sensor_bones(rot, rot6, rg, mask)
-        root_global = ry @ rot[:, :, 0]
-        rot = torch.cat([root_global.unsqueeze(2), rot[:, :, 1:]], dim=2)
+            anchored, joints = self._anchor_sensor_bones(rot, cols, rg, mask)
+            if joints:
+                pieces.append(anchored)
+                for i, j in enumerate(joints):
+                    order[j] = NUM_JOINTS + i
+        order[0] = sum(x.shape[2] for x in pieces)
+        pieces.append(ry.unsqueeze(2) @ rot[:, :, 0:1])
+        rot = _index(torch.cat(pieces, dim=2), 2, order)
         vel_h = out[..., NUM_JOINTS * 6:NUM_JOINTS * 6 + 3]
         vel = (ry @ vel_h.unsqueeze(-1)).squeeze(-1)
         logits = out[..., NUM_JOINTS * 6 + 3:NUM_JOINTS * 6 + 5]
@@ -574,7 +663,11 @@ class MirrorEnsemble(nn.Module):
         self.net = net
         # each sensor's left/right counterpart in the network's own list
         self.mirror_sensors = se.mirror_indices(net.config.sensors)
-        self.register_buffer("reflect", torch.diag(torch.tensor([-1.0, 1.0, 1.0])), persistent=False)
+        # reflecting in the sagittal plane: M R M for a rotation, a M for a vector (M = diag(-1, 1, 1)),
+        # written as sign flips
+        axis = torch.tensor([-1.0, 1.0, 1.0])
+        self.register_buffer("reflect_vector", axis, persistent=False)
+        self.register_buffer("reflect_rotation", axis[:, None] * axis[None, :], persistent=False)
 
     @property
     def config(self) -> ModelConfig:
@@ -591,32 +684,26 @@ class MirrorEnsemble(nn.Module):
     def zero_state(self, batch: int, device=None) -> tuple:
         return tuple(torch.cat([s, s], dim=-1) for s in self.net.zero_state(batch, device))
 
-    def _branch_widths(self) -> tuple:
-        """Where each state tensor's last dimension splits into the two branches (plain ints, so
-        the exported graph slices at constants)."""
-        c = self.net.config
-        return (c.embed, c.hidden) if c.core == "transformer" else (c.hidden, c.hidden)
-
     def forward(self, imu_orientation, imu_acceleration, state=None, imu_mask=None):
-        m = self.reflect
-        b = imu_orientation.shape[0]
         mirror = self.mirror_sensors
-        ori = torch.cat([imu_orientation, m @ imu_orientation[:, :, mirror] @ m], dim=0)
-        acc = torch.cat([imu_acceleration, imu_acceleration[:, :, mirror] @ m], dim=0)
+        ori = torch.cat([imu_orientation, imu_orientation[:, :, mirror] * self.reflect_rotation], dim=0)
+        acc = torch.cat([imu_acceleration, imu_acceleration[:, :, mirror] * self.reflect_vector], dim=0)
         if state is None:
-            state = self.zero_state(b, imu_orientation.device)
-        inner = tuple(torch.cat([s[..., :half], s[..., half:]], dim=1)
-                      for s, half in zip(state, self._branch_widths()))
+            state = self.zero_state(imu_orientation.shape[0], imu_orientation.device)
+        inner = tuple(torch.cat(_halves(s, -1), dim=1) for s in state)
         mask = self.net._checked_mask(imu_orientation, imu_mask)
         if mask is not None:   # the mirror image's left sensor is the right one: its mask too
             mask = torch.cat([mask, mask[:, :, mirror]], dim=0)
         rot, vel, contact, (h, c) = self.net(ori, acc, inner, mask)
-        back = m @ rot[b:][:, :, MIRROR_JOINTS] @ m
-        rot = rot6d_to_matrix(matrix_to_rot6d(0.5 * (rot[:b] + back)))
-        vel = 0.5 * (vel[:b] + vel[b:] @ m)
-        contact = 0.5 * (contact[:b] + contact[b:].flip(-1))
-        h = torch.cat([h[:, :b], h[:, b:]], dim=-1)
-        c = torch.cat([c[:, :b], c[:, b:]], dim=-1)
+        rot, back = _halves(rot, 0)
+        back = back[:, :, MIRROR_JOINTS] * self.reflect_rotation
+        rot = _gram_schmidt((0.5 * (rot + back))[..., 0:2])
+        vel, vel_back = _halves(vel, 0)
+        vel = 0.5 * (vel + vel_back * self.reflect_vector)
+        contact, contact_back = _halves(contact, 0)
+        contact = 0.5 * (contact + contact_back.flip(-1))
+        h = torch.cat(_halves(h, 1), dim=-1)
+        c = torch.cat(_halves(c, 1), dim=-1)
         return rot, vel, contact, (h, c)
 
 

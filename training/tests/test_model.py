@@ -212,6 +212,48 @@ def test_anchored_sensor_bones_start_at_their_measured_orientations():
     assert np.degrees(sk.angle_between_rots(g2[:, 15], g[:, 15])).min() > 1.0
 
 
+def _anchored_bone_by_bone(net, rot, cols, rg, mask):
+    """The anchoring's definition, one bone at a time: forward kinematics of every joint, then
+    each sensor bone re-predicted as its residual columns on parent_global^T R_sensor (the rest
+    pose where its sensor is missing), orthonormalised by the numpy Gram-Schmidt."""
+    glob = [rot[:, :, 0]]
+    for j in range(1, 24):
+        glob.append(glob[sk.PARENTS[j]] @ rot[:, :, j])
+    out = rot.clone()
+    for s, j in enumerate(net.anchor_joints):
+        if j == 0:
+            continue
+        measured = (glob[sk.PARENTS[j]].transpose(-1, -2) @ rg[:, :, s])[..., :2]
+        if mask is not None:
+            present = mask[:, :, s, None, None]
+            measured = measured * present + torch.eye(3)[:, :2] * (1 - present)
+        c = (cols[:, :, j] + measured).double().numpy()
+        out[:, :, j] = torch.from_numpy(sk.rot6d_to_matrix(np.concatenate([c[..., 0], c[..., 1]], -1)))
+    return out
+
+
+@pytest.mark.parametrize("sensors,wrist,masked", [(se.DEFAULT_SENSORS, "hand", False),
+                                                  (se.DEFAULT_SENSORS, "forearm", False),
+                                                  (se.DEFAULT_SENSORS + ("chest",), "hand", True)])
+def test_batched_anchoring_equals_the_bone_by_bone_definition(sensors, wrist, masked):
+    cfg = ModelConfig(64, 64, 2, 64, anchored=True, wrist_anchor=wrist, sensors=sensors,
+                      optional=("chest",) if masked else (), masked=masked)
+    net = PoseNet(cfg)
+    g = torch.Generator().manual_seed(len(sensors))
+    b, t, n = 2, 5, len(sensors)
+    rot = torch.from_numpy(sk.rot6d_to_matrix(torch.randn(b, t, 24, 6, generator=g).double().numpy())).float()
+    rg = torch.from_numpy(sk.rot6d_to_matrix(torch.randn(b, t, n, 6, generator=g).double().numpy())).float()
+    cols = 0.3 * torch.randn(b, t, 24, 3, 2, generator=g)
+    mask = (torch.rand(b, t, n, generator=g) > 0.4).float() if masked else None
+    anchored, joints = net._anchor_sensor_bones(rot, cols, rg, mask)
+    assert sorted(joints) == sorted(j for j in net.anchor_joints if j != 0)
+    want = _anchored_bone_by_bone(net, rot, cols, rg, mask)
+    assert torch.allclose(anchored, want[:, :, joints], atol=1e-5)
+    assert (anchored - rot[:, :, joints]).abs().max() > 0.1     # it did re-predict them
+    if masked:                                                  # and a missing sensor mattered
+        assert mask.min() == 0 and mask.max() == 1
+
+
 def test_hand_anchored_checkpoint_moves_its_wrist_anchoring_to_the_forearm():
     # A checkpoint config from before wrist_anchor existed means a hand-anchored network.
     assert ModelConfig.from_dict({**SMALL.to_dict(), "unknown_key": 1}) == SMALL
