@@ -3,9 +3,11 @@
     python3 -m training evaluate [--split val | --bvh DIR] [--models M.onnx ...]
         [--checkpoint CKPT] [--out training/results] [--max-clips N] [--max-seconds S]
         [--seed 0] [--no-torch] [--no-mirror] [--no-latency] [--noise realistic|none]
+        [--body-scale S]
 
 For every clip: IMU inputs are synthesised WITH realistic sensor errors (eval_augmentation() below, fixed
-seed, no body-scale or heading augmentation; --noise none: perfect sensors), then predicted by
+seed, no body-scale or heading augmentation; --noise none: perfect sensors; --body-scale S: every
+clip's skeleton and root path S times the size, a shorter or taller performer), then predicted by
   * PyTorch fp32 (the training checkpoint, mirror-averaged as `training export` ships it:
     model.MirrorEnsemble; --no-mirror evaluates the single network),
   * ONNX fp32 / fp16 (the shipped models, through the REAL ONNX Runtime: training/ort.py),
@@ -66,13 +68,17 @@ DRIFT_WINDOWS = (2.0, 5.0, 10.0)
 # mounting/calibration error, sensor-world yaw error, orientation noise, accelerometer noise and
 # bias, short drop-outs holding the last sample) and nothing else: no body scaling, no random
 # heading, no mirroring, no tempo change (the clip's own skeleton, heading and timing are kept).
-def eval_augmentation(noise: str = "realistic"):
+def eval_augmentation(noise: str = "realistic", body_scale: float = 1.0):
     """noise: "realistic" (the issue's targets are set with it) or "none": perfect sensors, which
-    separates what the sensor errors cost from what six sensors cannot observe."""
+    separates what the sensor errors cost from what six sensors cannot observe. body_scale: the
+    clip's skeleton and root path scaled (the same motion by a shorter or taller performer)."""
     from .synthesis import Augmentation
     if noise not in NOISE_CHOICES:
         raise UsageError(f"noise {noise!r}: expected one of {', '.join(NOISE_CHOICES)}")
-    aug = Augmentation(scale=(1.0, 1.0), heading=False, mirror=0.0, speed=(1.0, 1.0))
+    if not BODY_SCALE_RANGE[0] <= body_scale <= BODY_SCALE_RANGE[1]:
+        raise UsageError(f"body scale {body_scale:g}: expected {BODY_SCALE_RANGE[0]:g} to "
+                         f"{BODY_SCALE_RANGE[1]:g}")
+    aug = Augmentation(scale=(body_scale, body_scale), heading=False, mirror=0.0, speed=(1.0, 1.0))
     if noise == "none":
         aug = replace(aug, mounting_deg=0.0, heading_drift_deg=0.0, orientation_noise_deg=0.0,
                       acc_noise=0.0, acc_bias=0.0, drop_rate=0.0)
@@ -80,6 +86,8 @@ def eval_augmentation(noise: str = "realistic"):
 
 
 NOISE_CHOICES = ("realistic", "none")
+# 0.5x and 2x a CMU performer: beyond any adult (users are 1.5 to 2.0 m tall)
+BODY_SCALE_RANGE = (0.5, 2.0)
 
 
 TARGETS = {"angle_all": 10.0, "pos": 6.0, "baseline_reduction": 0.40, "params": 4_000_000,
@@ -119,11 +127,13 @@ def without_sensors(clip: Clip, absent) -> Clip:
 
 
 def synthesize_clip(motion: sk.Motion, rng, wrist: str = "hand", noise: str = "realistic",
-                    sensors=DEFAULT_SENSORS) -> Clip:
-    """IMU inputs (synthesis.synthesize with eval_augmentation(noise)) + the truth. wrist: where
-    the wrist sensors are (sensors.sensor_bones); sensors: segment names, the model's order."""
+                    sensors=DEFAULT_SENSORS, body_scale: float = 1.0) -> Clip:
+    """IMU inputs (synthesis.synthesize with eval_augmentation(noise, body_scale)) + the truth.
+    wrist: where the wrist sensors are (sensors.sensor_bones); sensors: segment names, the
+    model's order."""
     from .synthesis import synthesize
-    sample = synthesize(motion, rng=rng, augment=eval_augmentation(noise), wrist=wrist, sensors=sensors)
+    sample = synthesize(motion, rng=rng, augment=eval_augmentation(noise, body_scale), wrist=wrist,
+                        sensors=sensors)
     return Clip(motion.name, float(sample.fps), np.asarray(sample.offsets, np.float64),
                 np.asarray(sample.imu_orientation, np.float32),
                 np.asarray(sample.imu_acceleration, np.float32),
@@ -527,6 +537,15 @@ def _sensor_description(meta) -> str:
     return text + "."
 
 
+def _body_description(meta) -> str:
+    """The report's words on a scaled performer (nothing at the clips' own size)."""
+    s = float(meta.get("body_scale", 1.0))
+    if s == 1.0:
+        return ""
+    return (f" Every performer {s:g} times their size (skeleton and root path scaled; positions "
+            f"and drift are on the scaled body).")
+
+
 _WRIST_WORDS = {"hand": "back of the hands", "forearm": "forearms (wrist straps)"}
 
 
@@ -540,6 +559,7 @@ def write_report(out_dir, results, meta, latency, params, truth_jit):
              f"synthesised {_NOISE_WORDS[meta.get('noise_kind', 'realistic')]} ({meta['noise']}), "
              f"seed {meta['seed']}, "
              f"wrist sensors on the {_WRIST_WORDS[meta.get('wrist', 'hand')]}."
+             + _body_description(meta)
              + _sensor_description(meta)
              + _torch_description(meta), "",
              "Synthetic inputs from motion capture: not directly comparable to published numbers on "
@@ -672,19 +692,21 @@ def write_plots(out_dir, results, accs, clips):
 # ------------------------------------------------------------------------------ driver
 def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, latency=True,
              latency_frames=1800, source="", progress=True, mirror=True, wrist="hand",
-             noise="realistic", sensors=DEFAULT_SENSORS, absent=()) -> dict:
+             noise="realistic", sensors=DEFAULT_SENSORS, absent=(), body_scale: float = 1.0) -> dict:
     """Evaluate every available method on the motions; writes the report; returns summaries.
     mirror: the PyTorch model is the mirror-averaged pair (model.MirrorEnsemble), as exported.
     wrist: where the synthesised wrist sensors are ("hand": on the back of the hands, where the
     shipped model expects them; "forearm": wrist straps, sensors.sensor_bones).
     noise: "realistic" sensor errors (what the targets are for) or "none" (perfect sensors).
     sensors: the segment names synthesised, in the models' input order; absent: those of them
-    missing for the whole of every clip (mask 0, zero inputs: masked models only)."""
+    missing for the whole of every clip (mask 0, zero inputs: masked models only); body_scale:
+    every clip's skeleton and root path scaled by it."""
     for m in motions:
         if m.num_frames == 0:
             raise UsageError(f"motion {m.name}: no frames to evaluate")
     rng = np.random.default_rng(seed)
-    clips = [without_sensors(synthesize_clip(m, rng, wrist, noise, sensors), absent) for m in motions]
+    clips = [without_sensors(synthesize_clip(m, rng, wrist, noise, sensors, body_scale), absent)
+             for m in motions]
     if not clips:
         raise UsageError("no motions to evaluate")
     preds = {"baseline": [predict_baseline(c, wrist) for c in clips]}
@@ -732,7 +754,8 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
         diff = None
     meta = {"when": time.strftime("%Y-%m-%d %H:%M"), "source": source, "clips": len(clips),
             "seconds": sum(c.local_rot.shape[0] / c.fps for c in clips), "seed": seed,
-            "noise": _describe(eval_augmentation(noise)), "noise_kind": noise, "latency_frames": latency_frames, "wrist": wrist,
+            "noise": _describe(eval_augmentation(noise, body_scale)), "noise_kind": noise,
+            "body_scale": body_scale, "latency_frames": latency_frames, "wrist": wrist,
             "sensors": tuple(sensors), "absent": tuple(absent),
             "torch": "mirror-averaged (model.MirrorEnsemble)" if mirror else "single network",
             "checkpoint": _shown_path(checkpoint) if checkpoint else None, "torch_onnx_diff": diff}
@@ -789,6 +812,8 @@ def _trim(motions, max_clips, max_seconds):
     return motions
 
 
+_BODY_SCALE = number_type(float, lambda v: BODY_SCALE_RANGE[0] <= v <= BODY_SCALE_RANGE[1],
+                          f"a number from {BODY_SCALE_RANGE[0]:g} to {BODY_SCALE_RANGE[1]:g}")
 _POSITIVE_SECONDS = number_type(float, lambda v: v > 0, "a positive finite number of seconds")
 
 
@@ -819,6 +844,9 @@ def add_arguments(p):
     p.add_argument("--absent", default=None,
                    help="sensors missing for the whole of every clip, comma-separated (e.g. chest): "
                         "masked (model contract 2) models only")
+    p.add_argument("--body-scale", dest="body_scale", type=_BODY_SCALE, default=1.0,
+                   help="scale every clip's skeleton and root path (a shorter or taller performer doing "
+                        f"the same motion), {BODY_SCALE_RANGE[0]:g} to {BODY_SCALE_RANGE[1]:g}; default 1")
     p.add_argument("--no-latency", action="store_true")
     p.add_argument("--no-cache", action="store_true", help="do not cache converted BVH clips")
     return p
@@ -882,7 +910,8 @@ def main(args=None) -> int:
                  mirror=not getattr(args, "no_mirror", False),
                  wrist=getattr(args, "wrist_sensor", None) or expected_wrist_sensor(ckpt),
                  noise=getattr(args, "noise", "realistic"), sensors=sensors,
-                 absent=absent_sensors(getattr(args, "absent", None), sensors))
+                 absent=absent_sensors(getattr(args, "absent", None), sensors),
+                 body_scale=getattr(args, "body_scale", 1.0))
     def shown(v, digits):   # "-" where clips are too short to measure (as in the report)
         return f"{v:.{digits}f}" if v == v else "-"
     for name, s in r["results"].items():

@@ -251,9 +251,35 @@ def test_wrist_sensor_place_changes_what_the_wrist_sensors_report():
         ev.synthesize_clip(m, np.random.default_rng(0), wrist="elbow")
 
 
+def test_body_scale_is_the_same_motion_on_a_larger_performer(tmp_path, fixture_dir):
+    m = procedural.make_motion("walk", 3.0, seed=2)
+    base = ev.synthesize_clip(m, np.random.default_rng(0))
+    tall = ev.synthesize_clip(m, np.random.default_rng(0), body_scale=1.15)
+    np.testing.assert_allclose(tall.offsets, 1.15 * base.offsets, rtol=1e-6)
+    np.testing.assert_allclose(tall.root_pos, 1.15 * base.root_pos, rtol=1e-5, atol=1e-6)
+    np.testing.assert_array_equal(tall.local_rot, base.local_rot)
+    # the same noise draws: orientations identical, the sensors' accelerations larger
+    np.testing.assert_array_equal(tall.imu_orientation, base.imu_orientation)
+    ratio = np.abs(tall.imu_acceleration).mean() / np.abs(base.imu_acceleration).mean()
+    assert 1.08 < ratio < 1.16
+    with pytest.raises(ValueError, match="body scale 3"):
+        ev.eval_augmentation("realistic", 3.0)
+    d, _ = fixture_dir
+    reports = {}
+    for scale in ("1", "0.86"):
+        out = tmp_path / scale
+        assert ev.main(["--bvh", str(d), "--no-torch", "--models", "--out", str(out), "--max-clips", "2",
+                        "--no-latency", "--no-cache", "--body-scale", scale]) == 0
+        reports[scale] = (out / "evaluation.md").read_text()
+    assert "Every performer 0.86 times their size" in reports["0.86"]
+    assert "times their size" not in reports["1"]
+
+
 @pytest.mark.parametrize("option, value", [("--seed", "-1"), ("--max-seconds", "nan"), ("--max-seconds", "inf"),
                                            ("--max-seconds", "-1"), ("--max-seconds", "0"),
-                                           ("--max-clips", "-1"), ("--max-clips", "0")])
+                                           ("--max-clips", "-1"), ("--max-clips", "0"),
+                                           ("--body-scale", "0.4"), ("--body-scale", "2.5"),
+                                           ("--body-scale", "nan")])
 def test_bad_option_values_are_usage_errors(option, value, capsys):
     parser = ev.add_arguments(__import__("argparse").ArgumentParser(prog="evaluate"))
     with pytest.raises(SystemExit) as e:
