@@ -97,6 +97,7 @@ class TrainConfig:
     arm_jitter_deg: float = 0.0
     spine_jitter_deg: float = 0.0
     trunk_swap: float = 0.0
+    body_scale: tuple = (0.9, 1.1)    # Augmentation.scale: each clip's body U(a, b) x its size
     rare_boost: float = 0.0           # clips drawn by length x rarity^rare_boost (rarity.py)
     rot_loss: str = "chordal"         # "chordal": Frobenius distance per joint (~ angle, like the
                                       # metric); "squared": its square (punishes outliers more)
@@ -439,7 +440,8 @@ def make_batcher(motions, cfg: TrainConfig, rng: np.random.Generator, sensors=DE
     """sensors: the network's (ModelConfig.sensors), synthesised in its order; masking: what a
     masked network's clips lack (sensor_masking)."""
     base = StreamBatcher(motions, cfg.batch, cfg.window, rng,
-                         Augmentation(arm_swap=cfg.arm_swap, arm_jitter_deg=cfg.arm_jitter_deg,
+                         Augmentation(scale=tuple(cfg.body_scale), arm_swap=cfg.arm_swap,
+                                      arm_jitter_deg=cfg.arm_jitter_deg,
                                       spine_jitter_deg=cfg.spine_jitter_deg, trunk_swap=cfg.trunk_swap),
                          wrist=cfg.wrist_sensor, rare_boost=cfg.rare_boost, sensors=sensors, masking=masking)
     return ParallelBatcher(base, cfg.data_workers, cfg.seed) if cfg.data_workers > 0 else base
@@ -1085,7 +1087,7 @@ def _same(key: str, a, b) -> bool:
         return a is None or b is None or tuple(a) == tuple(b)
     if key == "masked":   # not asking for the mask is no contradiction of a masked network
         return not a or bool(b)
-    if key in ("dropout_seconds",):
+    if key in ("dropout_seconds", "body_scale"):
         return tuple(a) == tuple(b)
     if key == "size":
         return a in SIZES and b in SIZES and _size_dims(SIZES[a]) == _size_dims(SIZES[b])
@@ -1150,7 +1152,7 @@ def config_from_args(args) -> TrainConfig:
               "max_clips", "resume", "smoke", "init_from", "dropout", "rot_loss", "arm_swap",
               "arm_jitter_deg", "spine_jitter_deg", "trunk_swap", "rare_boost", "w_pos", "ckpt_dir",
               "results_dir", "wrist_sensor", "data_workers", "eval_every_s", "sensors", "optional",
-              "masked", "optional_absent", "sensor_dropout", "dropout_seconds"):
+              "masked", "optional_absent", "sensor_dropout", "dropout_seconds", "body_scale"):
         v = getattr(args, k, None)
         if v is not None and v is not False:
             setattr(cfg, k, v)
@@ -1239,6 +1241,18 @@ def _seconds_range(text: str) -> tuple:
     return (a, b)
 
 
+def _scale_range(text: str) -> tuple:
+    """--body-scale A,B: 0.5 <= A <= B <= 2 (times each clip's own size)."""
+    import argparse
+    try:
+        a, b = (float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not two numbers A,B (body scales)") from None
+    if not (math.isfinite(a) and math.isfinite(b) and 0.5 <= a <= b <= 2.0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not A,B with 0.5 <= A <= B <= 2")
+    return (a, b)
+
+
 def add_arguments(parser) -> None:
     parser.add_argument("--budget-minutes", dest="budget_minutes", type=POSITIVE, default=None,
                         help="wall-clock budget (default 60)")
@@ -1279,6 +1293,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--spine-jitter", dest="spine_jitter_deg", type=NON_NEGATIVE, default=None,
                         help="slow random offsets of the three spine joints, per-axis sigma in "
                              "degrees (default 0)")
+    parser.add_argument("--body-scale", dest="body_scale", type=_scale_range, default=None,
+                        help="each training clip's body (skeleton and root path) U(A, B) times its size "
+                             "(default 0.9,1.1; users are 1.5-2.0 m, the CMU clips ~1.72 m)")
     parser.add_argument("--rare-boost", dest="rare_boost", type=NON_NEGATIVE, default=None,
                         help="draw clips by length x rarity^A of their poses (training/rarity.py): "
                              "rare motion more often (default 0: by length)")

@@ -79,13 +79,15 @@ def test_command_line_options_reach_the_training_config():
     tr.add_arguments(parser)
     cfg = tr.config_from_args(parser.parse_args(
         ["--pos-weight", "30", "--arm-swap", "0.5", "--arm-jitter", "12", "--lr", "2.5e-4", "--seed", "3",
-         "--rare-boost", "0.5", "--spine-jitter", "6", "--trunk-swap", "0.25"]))
+         "--rare-boost", "0.5", "--spine-jitter", "6", "--trunk-swap", "0.25", "--body-scale", "0.85,1.15"]))
     assert (cfg.w_pos, cfg.arm_swap, cfg.arm_jitter_deg, cfg.lr, cfg.seed, cfg.rare_boost) == \
         (30.0, 0.5, 12.0, 2.5e-4, 3, 0.5)
     assert (cfg.spine_jitter_deg, cfg.trunk_swap) == (6.0, 0.25)
     walk = procedural.make_motion("walk", seconds=4.0, seed=1)
-    assert tr.make_batcher([walk], cfg, np.random.default_rng(0)).augment.spine_jitter_deg == 6.0
+    augment = tr.make_batcher([walk], cfg, np.random.default_rng(0)).augment
+    assert augment.spine_jitter_deg == 6.0 and augment.scale == (0.85, 1.15)
     default = tr.config_from_args(parser.parse_args([]))
+    assert tr.make_batcher([walk], default, np.random.default_rng(0)).augment.scale == (0.9, 1.1)
     assert default == tr.TrainConfig()
     assert tr.config_from_args(parser.parse_args(["--no-anchor"])).anchored is False
 
@@ -593,7 +595,8 @@ def test_training_stops_at_a_non_finite_loss_and_saves_no_nan_weights(tmp_path, 
     "--dropout 1", "--dropout -0.1", "--seed -1", "--steps 0", "--steps -1", "--budget-minutes -1",
     "--budget-minutes inf", "--stop-after -3", "--stop-after 0", "--arm-swap 5", "--arm-jitter -1",
     "--max-clips -1", "--max-clips 0", "--pos-weight nan", "--pos-weight -2", "--steps 2.5",
-    "--rare-boost -1", "--rare-boost nan"])
+    "--rare-boost -1", "--rare-boost nan", "--body-scale 1.2,1.1", "--body-scale 0.3,1",
+    "--body-scale 1,2.5", "--body-scale nan,1", "--body-scale 1"])
 def test_bad_numeric_training_options_are_usage_errors(option, capsys):
     with pytest.raises(SystemExit) as e:
         _cli(option.split())
