@@ -583,7 +583,7 @@ class PoseNet(nn.Module):
         measured = parent_global.transpose(-1, -2) @ _index(rg, 2, plan.sensors)[..., 0:2]
         if mask is not None:   # a missing sensor measures nothing: its bone is a residual on the rest pose
             present = _index(mask, 2, plan.sensors)[..., None, None]
-            measured = measured * present + self.rest_columns[1] * (1.0 - present)
+            measured = measured * present + self.identity3[:, :2] * (1.0 - present)
         return _gram_schmidt(_index(cols, 2, plan.joints) + measured), plan.joints
 
     def _checked_mask(self, ori, mask):
