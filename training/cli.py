@@ -24,6 +24,21 @@ def number_type(convert, accepts, expected: str):
     return parse
 
 
+def number_pair_type(accepts, unreadable: str, out_of_range: str):
+    """An argparse type for "A,B": a tuple of two finite floats that `accepts(a, b)`, else
+    ArgumentTypeError with `unreadable` (not two numbers) or `out_of_range`, each a format string
+    whose {text} is the quoted argument."""
+    def parse(text):
+        try:
+            a, b = (float(x) for x in text.split(","))
+        except ValueError:
+            raise argparse.ArgumentTypeError(unreadable.format(text=repr(text))) from None
+        if not (math.isfinite(a) and math.isfinite(b) and accepts(a, b)):
+            raise argparse.ArgumentTypeError(out_of_range.format(text=repr(text)))
+        return (a, b)
+    return parse
+
+
 POSITIVE_INT = number_type(int, lambda v: v >= 1, "a positive integer")
 NON_NEGATIVE_INT = number_type(int, lambda v: v >= 0, "an integer >= 0")
 POSITIVE = number_type(float, lambda v: v > 0, "a positive number")

@@ -55,7 +55,7 @@ import torch
 import torch.nn.functional as F
 
 from . import skeleton as sk
-from .cli import NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, number_type
+from .cli import NON_NEGATIVE, NON_NEGATIVE_INT, POSITIVE, POSITIVE_INT, number_pair_type, number_type
 from .errors import CommandError, UsageError
 from .files import atomic_torch_save
 from .model import (PELVIS, ModelConfig, PoseNet, check_optional, check_sensors, count_parameters,
@@ -1229,28 +1229,13 @@ def _optional_names(text: str) -> tuple:
     return names
 
 
-def _seconds_range(text: str) -> tuple:
-    """--dropout-seconds A,B: 0 < A <= B."""
-    import argparse
-    try:
-        a, b = (float(x) for x in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not two numbers A,B (seconds)") from None
-    if not (math.isfinite(a) and math.isfinite(b) and 0 < a <= b):
-        raise argparse.ArgumentTypeError(f"{text!r}: expected 0 < A <= B seconds")
-    return (a, b)
-
-
-def _scale_range(text: str) -> tuple:
-    """--body-scale A,B: 0.5 <= A <= B <= 2 (times each clip's own size)."""
-    import argparse
-    try:
-        a, b = (float(x) for x in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not two numbers A,B (body scales)") from None
-    if not (math.isfinite(a) and math.isfinite(b) and 0.5 <= a <= b <= 2.0):
-        raise argparse.ArgumentTypeError(f"{text!r} is not A,B with 0.5 <= A <= B <= 2")
-    return (a, b)
+# --dropout-seconds A,B: 0 < A <= B
+_seconds_range = number_pair_type(lambda a, b: 0 < a <= b, "{text} is not two numbers A,B (seconds)",
+                                  "{text}: expected 0 < A <= B seconds")
+# --body-scale A,B: 0.5 <= A <= B <= 2 (times each clip's own size)
+_scale_range = number_pair_type(lambda a, b: 0.5 <= a <= b <= 2.0,
+                                "{text} is not two numbers A,B (body scales)",
+                                "{text} is not A,B with 0.5 <= A <= B <= 2")
 
 
 def add_arguments(parser) -> None:
