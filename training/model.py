@@ -288,7 +288,7 @@ def _norm(v: torch.Tensor, dim: int = -1, eps: float = 1e-8) -> torch.Tensor:
 _YZX, _ZXY = [1, 2, 0], [2, 0, 1]
 
 
-def _gram_schmidt(cols: torch.Tensor) -> torch.Tensor:
+def gram_schmidt(cols: torch.Tensor) -> torch.Tensor:
     """(..., 3, 2) two columns -> (..., 3, 3) rotation: the first column normalised, the second
     made orthogonal to it and normalised, the third their cross product."""
     a1, a2 = cols[..., 0:1], cols[..., 1:2]
@@ -297,21 +297,6 @@ def _gram_schmidt(cols: torch.Tensor) -> torch.Tensor:
     b2 = b2 / _norm(b2, -2)
     b3 = b1[..., _YZX, :] * b2[..., _ZXY, :] - b1[..., _ZXY, :] * b2[..., _YZX, :]
     return torch.cat([b1, b2, b3], dim=-1)
-
-
-def rot6d_columns(x: torch.Tensor) -> torch.Tensor:
-    """(..., 6) = (column 0, column 1) -> the two columns (..., 3, 2)."""
-    return _reshape_tail(x, x.dim() - 1, (2, 3)).transpose(-1, -2)
-
-
-def rot6d_to_matrix(x: torch.Tensor) -> torch.Tensor:
-    """(..., 6) = (column 0, column 1) -> (..., 3, 3) rotation by Gram-Schmidt."""
-    return _gram_schmidt(rot6d_columns(x))
-
-
-def matrix_to_rot6d(m: torch.Tensor) -> torch.Tensor:
-    """(..., 3, 3) -> (..., 6): column 0 then column 1."""
-    return torch.cat([m[..., :, 0], m[..., :, 1]], dim=-1)
 
 
 # Ry(heading) = s * _RY_BASIS[0] + c * _RY_BASIS[1] + _RY_UP, (s, c) the normalised (x, z) of h
@@ -584,7 +569,7 @@ class PoseNet(nn.Module):
         if mask is not None:   # a missing sensor measures nothing: its bone is a residual on the rest pose
             present = _index(mask, 2, plan.sensors)[..., None, None]
             measured = measured * present + self.identity3[:, :2] * (1.0 - present)
-        return _gram_schmidt(_index(cols, 2, plan.joints) + measured), plan.joints
+        return gram_schmidt(_index(cols, 2, plan.joints) + measured), plan.joints
 
     def _checked_mask(self, ori, mask):
         """The mask a masked network runs with (all present when None); a ValueError for a mask
@@ -621,7 +606,7 @@ class PoseNet(nn.Module):
         out = self.head(y)
         cols = _reshape_tail(out[..., _COLUMN_ORDER], 2, (NUM_JOINTS, 3, 2))
         base = self.rest_columns + rg[:, :, self.pelvis:self.pelvis + 1, :, 0:2] * self.pelvis_only
-        rot = _gram_schmidt(cols + base)
+        rot = gram_schmidt(cols + base)
         # the output is gathered from [network rotations, anchored bones, pelvis rotated back
         # out of the heading frame] in one operation
         pieces, order = [rot], list(range(NUM_JOINTS))
@@ -697,7 +682,7 @@ class MirrorEnsemble(nn.Module):
         rot, vel, contact, (h, c) = self.net(ori, acc, inner, mask)
         rot, back = _halves(rot, 0)
         back = back[:, :, MIRROR_JOINTS] * self.reflect_rotation
-        rot = _gram_schmidt((0.5 * (rot + back))[..., 0:2])
+        rot = gram_schmidt((0.5 * (rot + back))[..., 0:2])
         vel, vel_back = _halves(vel, 0)
         vel = 0.5 * (vel + vel_back * self.reflect_vector)
         contact, contact_back = _halves(contact, 0)
