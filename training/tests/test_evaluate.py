@@ -50,6 +50,18 @@ def test_baseline_puts_sensor_orientations_on_their_bones():
     assert 0.05 < err.mean() < 8.0
 
 
+def _baseline_reports(tmp_path, fixture_dir, option, values) -> dict:
+    """evaluate's report on two fixture clips (baseline only) for each value of one option."""
+    d, _ = fixture_dir
+    reports = {}
+    for value in values:
+        out = tmp_path / value
+        assert ev.main(["--bvh", str(d), "--no-torch", "--models", "--out", str(out), "--max-clips", "2",
+                        "--no-latency", "--no-cache", option, value]) == 0
+        reports[value] = (out / "evaluation.md").read_text()
+    return reports
+
+
 def test_noise_none_gives_perfect_sensors_and_says_so(tmp_path, fixture_dir):
     m = procedural.make_motion("mixed", 2.0, seed=3)
     clip = ev.synthesize_clip(m, np.random.default_rng(0), noise="none")
@@ -60,13 +72,7 @@ def test_noise_none_gives_perfect_sensors_and_says_so(tmp_path, fixture_dir):
     assert ev.rotation_angle_deg(pred.local_rot[:, 0], clip.local_rot[:, 0]).max() < 0.05
     with pytest.raises(ValueError, match="noise 'loud'"):
         ev.eval_augmentation("loud")
-    d, _ = fixture_dir
-    reports = {}
-    for noise in ("none", "realistic"):
-        out = tmp_path / noise
-        assert ev.main(["--bvh", str(d), "--no-torch", "--models", "--out", str(out), "--max-clips", "2",
-                        "--no-latency", "--no-cache", "--noise", noise]) == 0
-        reports[noise] = (out / "evaluation.md").read_text()
+    reports = _baseline_reports(tmp_path, fixture_dir, "--noise", ("none", "realistic"))
     assert "from perfect sensors" in reports["none"] and "perfect sensors, not whether" in reports["none"]
     assert "with realistic sensor noise" in reports["realistic"] and "perfect" not in reports["realistic"]
     pelvis = {k: next(line for line in t.splitlines() if line.startswith("| 0 pelvis |"))
@@ -264,13 +270,7 @@ def test_body_scale_is_the_same_motion_on_a_larger_performer(tmp_path, fixture_d
     assert 1.08 < ratio < 1.16
     with pytest.raises(ValueError, match="body scale 3"):
         ev.eval_augmentation("realistic", 3.0)
-    d, _ = fixture_dir
-    reports = {}
-    for scale in ("1", "0.86"):
-        out = tmp_path / scale
-        assert ev.main(["--bvh", str(d), "--no-torch", "--models", "--out", str(out), "--max-clips", "2",
-                        "--no-latency", "--no-cache", "--body-scale", scale]) == 0
-        reports[scale] = (out / "evaluation.md").read_text()
+    reports = _baseline_reports(tmp_path, fixture_dir, "--body-scale", ("1", "0.86"))
     assert "Every performer 0.86 times their size" in reports["0.86"]
     assert "times their size" not in reports["1"]
 
