@@ -44,7 +44,8 @@ started=$(date +%s)
 mkdir -p "$BUILD"
 say "configure + build (MinGW-w64) in $BUILD"
 if ! cmake -S "$NATIVE" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-     -DCMAKE_TOOLCHAIN_FILE="$NATIVE/cmake/mingw-w64-x86_64.cmake" >"$BUILD.configure.log" 2>&1; then
+     -DCMAKE_TOOLCHAIN_FILE="$NATIVE/cmake/mingw-w64-x86_64.cmake" \
+     -DMOCAP_WINE="$ROOT/scripts/wine_test_launcher.sh" >"$BUILD.configure.log" 2>&1; then
   cat "$BUILD.configure.log"; die "cmake configure failed"
 fi
 if ! cmake --build "$BUILD" -j"$JOBS" >"$BUILD.build.log" 2>&1; then
@@ -70,6 +71,9 @@ if [ ! -f "$WINEPREFIX/system.reg" ]; then
   wineserver -w
 fi
 
+# One wineserver for the whole run instead of one that exits after 3 s idle and is started again:
+# fewer chances for a program's start to race the server's (wine_test_launcher.sh covers the rest).
+wineserver -p </dev/null >/dev/null 2>&1
 say "ctest under $(wine --version) (test lists are read under Wine first)"
 (cd "$BUILD" && ctest --output-on-failure -j"$JOBS" "$@") 2>&1 | tee "$LOG"
 rc=${PIPESTATUS[0]}
