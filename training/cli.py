@@ -103,6 +103,7 @@ INPUTS = {
     "average": [("checkpoints", "files", "checkpoint")],
     "synth-capture": [("bvh", "file", "BVH")],
     "missing-sensor": [("bvh", "bvh_or_pack", "--bvh"), ("model", "file", "--model")],
+    "stride-scaling": [("model", "file", "--model"), ("write", "files", "--write")],
 }
 
 

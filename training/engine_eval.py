@@ -2,7 +2,7 @@
 
     python3 -m training engine-eval [--split val | --split test | --bvh DIR | --procedural]
         [--clips 40] [--clip-seconds 40] [--model M.onnx] [--sensors A,B,...]
-        [--smoothing HZ,BETA ...] [--seed 0] [--out FILE] [--keep DIR]
+        [--smoothing HZ,BETA ...] [--body-scale S] [--height M] [--seed 0] [--out FILE] [--keep DIR]
 
 For each clip (the first --clip-seconds of evenly spaced clips at least MIN_CLIP_S long, enough
 for the 10 s drift windows) synth_capture writes a byte-level capture (calibration prelude,
@@ -10,6 +10,9 @@ realistic noise, random mountings and headings; --sensors: the capture's sensor 
 model's), and `mocapctl replay --model M --truth --pose-csv --metrics-json` runs it through
 decode -> filter -> calibrate -> model -> output filter -> drift correction: once with the raw
 model output (--smoothing 0) and once per output filter setting (default: the engine's own).
+--body-scale S synthesises every clip on a body S times the size (skeleton and root path);
+--height M gives the engine the performer's height, whose root then moves in the size of the
+model's skeleton and is read back in the performer's metres (x M / the model's training height).
 
 Per setting (means over every compared pose of every clip):
   angle, pos     mocapctl's joint angle error (24 joints) and root-aligned position error
@@ -136,6 +139,9 @@ class ClipResult:
     truth_root: np.ndarray | None = None       # (N,3)
     truth_contact: np.ndarray | None = None    # (N,2) bool
     fps: float = 60.0
+    # metres of the performer per metre of the engine's root: with --height the engine moves the
+    # root in its skeleton's size, the performer's height / the model's training height
+    root_unit: float = 1.0
 
     @classmethod
     def from_truth(cls, name: str, seconds: float, truth: dict) -> "ClipResult":
@@ -176,8 +182,17 @@ def truth_contacts(truth: dict) -> np.ndarray:
     return foot_contact_labels(pos, float(truth["fps"])) > 0.5
 
 
+def scaled_motion(motion: sk.Motion, scale: float) -> sk.Motion:
+    """The same movement on a body scale times the size (skeleton and root path), as
+    `evaluate --body-scale` synthesises it."""
+    if scale == 1.0:
+        return motion
+    return sk.Motion(motion.name, motion.subject, motion.fps, motion.local_rot,
+                     (motion.root_pos * scale).astype(np.float32), (motion.offsets * scale).astype(np.float32))
+
+
 def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: Path, seed: int,
-             mocapctl) -> ClipResult:
+             mocapctl, height: float = 0.0, root_unit: float = 1.0) -> ClipResult:
     from .dropout_eval import replay_command
     from .synth_capture import load_truth, synth_capture
     cap = workdir / f"{index:02d}-{motion.name}.cap"
@@ -185,11 +200,12 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
                   lead_in=LEAD_IN_S, sensors=sensors)
     truth = load_truth(cap.with_suffix(".truth.npz"))
     out = ClipResult.from_truth(motion.name, motion.num_frames / motion.fps, truth)
+    out.root_unit = root_unit
     for s in (RAW, *[x for x in settings if x != RAW]):
         tag = "raw" if s == RAW else s.replace(",", "_")
         poses, metrics = cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json")
         cmd = replay_command(mocapctl, cap, cap.with_suffix(".truth.csv"), model, poses, metrics,
-                             sensors) + ["--smoothing", s]
+                             sensors) + ["--smoothing", s] + (["--height", f"{height:g}"] if height else [])
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise CommandError(f"mocapctl replay {cap.name} --smoothing {s} failed (status "
@@ -204,8 +220,9 @@ def clip_drift(clip, setting) -> dict:
     one clip's replay with this output setting."""
     r = clip.runs[setting]
     true = clip.truth_root[r.truth_index]
-    model_root = integrated_root(r.velocity, clip.fps)
-    return {w: (window_drift(r.times, r.root, true, w), window_drift(r.times, model_root, true, w))
+    model_root = integrated_root(r.velocity, clip.fps) * clip.root_unit
+    root = r.root * clip.root_unit
+    return {w: (window_drift(r.times, root, true, w), window_drift(r.times, model_root, true, w))
             for w in DRIFT_WINDOWS}
 
 
@@ -272,10 +289,16 @@ def write_report(path: Path, clips, settings, meta: dict, summary: dict) -> Path
              f"model -> output filter -> drift correction. Made by:", "",
              f"    {meta['command']}", "",
              f"({meta['elapsed_s'] / 60:.1f} min on this machine.) Figures are means over every compared "
-             "pose of every clip; the docstring of `training/engine_eval.py` defines each.", "",
-             "| output | angle (deg) | position (cm) | jitter (10^2 m/s^3) | x truth, pooled | x truth, "
-             "per clip (geo. mean) | added latency ms, median (range) |",
-             "|---|---|---|---|---|---|---|"]
+             "pose of every clip; the docstring of `training/engine_eval.py` defines each.", ""]
+    if meta.get("body_scale", 1.0) != 1.0 or meta.get("height"):
+        lines += [f"Every clip on a body {meta.get('body_scale', 1.0):g} times the size; "
+                  + (f"the engine was told the performer is {meta['height']:g} m tall and its root is read "
+                     "back in the performer's metres. " if meta.get("height") else
+                     "the engine was told no height. ")
+                  + "Positions are those of the model's own skeleton against the scaled truth.", ""]
+    lines += ["| output | angle (deg) | position (cm) | jitter (10^2 m/s^3) | x truth, pooled | x truth, "
+              "per clip (geo. mean) | added latency ms, median (range) |",
+              "|---|---|---|---|---|---|---|"]
     for s, v in summary.items():
         lag = "-" if s == RAW else f"{_fmt(v['lag_ms'], 0)} ({_fmt(v['lag_ms_range'][0], 0)} - {_fmt(v['lag_ms_range'][1], 0)})"
         lines.append(f"| {_label(s)} | {_fmt(v['angle'])} | {_fmt(v['pos'])} | {_fmt(v['jitter'])} | "
@@ -335,16 +358,27 @@ def findings(summary, settings) -> list:
 
 
 # ------------------------------------------------------------------------------ command
-def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=None, progress=print) -> list:
-    from .ort import mocapctl_path
+def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=None, progress=print,
+                   body_scale: float = 1.0, height: float = 0.0) -> list:
+    """body_scale: every clip on a body that many times the size; height: the performer height
+    given to the engine (0: none), its root then read back in the performer's metres."""
+    from .ort import mocapctl_path, model_info
     mocapctl = mocapctl_path(require_onnx=True)
+    root_unit = 1.0
+    if height:
+        info = model_info(str(model))
+        if "training_height" not in info:
+            raise UsageError(f"--height: {Path(model).name} has no stride scaling (python3 -m "
+                             "training stride-scaling --write)")
+        root_unit = height / info["training_height"]
     clips = []
     with tempfile.TemporaryDirectory(prefix="engine-eval-") as tmp:
         root = Path(workdir) if workdir else Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
         for i, m in enumerate(motions):
             t0 = time.monotonic()
-            clips.append(run_clip(m, i, model, settings, sensors, root, seed + i, mocapctl))
+            clips.append(run_clip(scaled_motion(m, body_scale), i, model, settings, sensors, root,
+                                  seed + i, mocapctl, height, root_unit))
             if progress:
                 progress(f"  {i + 1}/{len(motions)} {m.name}: {len(clips[-1].runs)} replays in "
                          f"{time.monotonic() - t0:.0f} s")
@@ -352,6 +386,8 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
 
 
 SMOOTHING = number_type(str, lambda v: _smoothing_ok(v), "HZ or HZ,BETA with HZ >= 0 and BETA >= 0")
+BODY_SCALE = number_type(float, lambda v: 0.5 <= v <= 2.0, "a number from 0.5 to 2")
+HEIGHT = number_type(float, lambda v: 1.0 <= v <= 2.5, "a height from 1 to 2.5 m")
 
 
 def _smoothing_ok(v: str) -> bool:
@@ -371,6 +407,11 @@ def add_arguments(p=None):
     p.add_argument("--sensors", default=None, help="the capture's sensors (default: the model's)")
     p.add_argument("--smoothing", nargs="+", type=SMOOTHING, default=[ENGINE_SMOOTHING],
                    help=f"output filter settings beside the raw output (default {ENGINE_SMOOTHING}, the engine's)")
+    p.add_argument("--body-scale", dest="body_scale", type=BODY_SCALE, default=1.0,
+                   help="every clip on a body this many times the size (0.5-2; default 1)")
+    p.add_argument("--height", type=HEIGHT, default=0.0,
+                   help="give the engine this performer height, metres (mocapctl replay --height); "
+                        "drift is then measured in the performer's metres")
     p.add_argument("--seed", type=NON_NEGATIVE_INT, default=0)
     p.add_argument("--out", default=None, help="the report (default training/results/engine.md, "
                    "training/results/test/engine.md for --split test)")
@@ -392,8 +433,13 @@ def main(args=None) -> int:
     print(f"engine-eval: {len(motions)} clips ({source}), {len(sensors)} sensors, model {_shown(model)}, "
           f"output {', '.join(_label(s) for s in [RAW] + settings)}")
     started = time.monotonic()
-    clips = run_evaluation(motions, model, settings, sensors, args.seed, args.keep)
+    clips = run_evaluation(motions, model, settings, sensors, args.seed, args.keep,
+                           body_scale=args.body_scale, height=args.height)
     argv = source_argv(args) + ["--seed", str(args.seed)]
+    if args.body_scale != 1.0:
+        argv += ["--body-scale", f"{args.body_scale:g}"]
+    if args.height:
+        argv += ["--height", f"{args.height:g}"]
     if model.resolve() != Path(add_arguments().get_default("model")).resolve():
         argv += ["--model", _shown(model)]
     if args.sensors:
@@ -403,6 +449,7 @@ def main(args=None) -> int:
     if args.out:
         argv += ["--out", _shown(args.out)]
     meta = {"source": source, "sensors": sensors, "model": _shown(model),
+            "body_scale": args.body_scale, "height": args.height,
             "command": "python3 -m training engine-eval " + " ".join(shlex.quote(a) for a in argv),
             "elapsed_s": time.monotonic() - started}
     summary = summarize(clips, settings)

@@ -240,7 +240,8 @@ def parse_timing(text: str) -> dict:
 def model_info(model_path) -> dict:
     """`mocapctl model-info` parsed: model_name, precision, contract_version, frame_rate,
     sensor_order, sensor_count, optional (segment names), imu_mask (bool), state_layers,
-    state_size, joint_names, joint_parents, rest_offsets (24,3)."""
+    state_size, joint_names, joint_parents, rest_offsets (24,3); training_height and
+    stride_exponent when the model has stride scaling."""
     r = _run([mocapctl_path(), "model-info", model_path])
     if r.returncode != 0:
         raise OnnxRuntimeError(r.stderr.strip())
@@ -251,6 +252,8 @@ def model_info(model_path) -> dict:
                                             "frame_rate", "sensor_order", "sensor_count",
                                             "optional", "imu_mask"):
             info[parts[0]] = " ".join(parts[1:])
+        elif parts[:2] == ["stride_scaling", "training_height"]:
+            info["training_height"], info["stride_exponent"] = float(parts[2]), float(parts[5])
         elif parts[:1] == ["state"]:
             info["state_layers"], info["state_size"] = int(parts[2].rstrip(",")), int(parts[4])
         elif len(parts) == 6 and parts[0].isdigit():

@@ -51,6 +51,8 @@ _HAND = 0.45 * 0.108 * _H       # 0.08505 (wrist -> knuckles)
 _FOOT_FWD = 0.53 * 0.152 * _H   # 0.14098 (ankle -> ball of foot)
 _BALL_Y = 0.02
 
+STANDING_HEIGHT = _H           # the DEFAULT_OFFSETS body's height, sole to crown (metres)
+
 DEFAULT_OFFSETS = np.array([
     [0.0, _PELVIS_Y, 0.0],                      # 0 pelvis (height above the sole)
     [0.085, _HIP_Y - _PELVIS_Y, 0.0],           # 1 left_hip

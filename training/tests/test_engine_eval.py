@@ -109,3 +109,48 @@ def _clips_from(keep):
             c.runs[s] = ee.read_replay(cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json"), truth)
         clips.append(c)
     return clips
+
+
+def test_scaled_motion_scales_the_body_and_its_path_only():
+    from training import procedural
+    m = procedural.make_motion("walk", seconds=2, seed=1, name="walk")
+    big = ee.scaled_motion(m, 1.14)
+    assert np.allclose(big.offsets, 1.14 * m.offsets, atol=1e-6)
+    assert np.allclose(big.root_pos, 1.14 * m.root_pos, atol=1e-5)
+    assert np.array_equal(big.local_rot, m.local_rot)
+    assert ee.scaled_motion(m, 1.0) is m
+
+
+@needs_ort
+def test_a_height_reaches_the_engine_and_drift_is_read_in_the_performers_metres(tmp_path):
+    out, keep = tmp_path / "engine.md", tmp_path / "keep"
+    assert ee.main(["--procedural", "--clips", "1", "--clip-seconds", "16", "--body-scale", "1.14",
+                    "--height", "1.96", "--out", str(out), "--keep", str(keep)]) == 0
+    text = out.read_text()
+    assert "--body-scale 1.14 --height 1.96" in text
+    assert "told the performer is 1.96 m tall" in text
+    from training import ort
+    from training.synth_capture import load_truth
+    info = ort.model_info(str(ee.add_arguments().get_default("model")))
+    unit = 1.96 / info["training_height"]
+    gain = unit ** (info["stride_exponent"] - 1.0)
+    cap = next(keep.glob("*.cap"))
+    truth = load_truth(cap.with_suffix(".truth.npz"))
+    told = ee.read_replay(cap.with_suffix(".2_12.csv"), cap.with_suffix(".2_12.json"), truth)
+    # the same capture without the height: the engine's velocity is the model's times the gain
+    plain_csv, plain_json = tmp_path / "plain.csv", tmp_path / "plain.json"
+    from training.dropout_eval import replay_command
+    from training.ort import mocapctl_path
+    import subprocess
+    cmd = replay_command(mocapctl_path(), cap, cap.with_suffix(".truth.csv"),
+                         ee.add_arguments().get_default("model"), plain_csv, plain_json) + ["--smoothing", "2,12"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    plain = ee.read_replay(plain_csv, plain_json, truth)
+    assert len(plain.velocity) == len(told.velocity) > 500
+    assert np.allclose(told.velocity, gain * plain.velocity, atol=2e-5)
+    # the clip's drift reads the engine's root back in the performer's metres
+    c = ee.ClipResult.from_truth(cap.stem, 16.0, truth)
+    c.runs["2,12"], c.root_unit = told, unit
+    true = np.asarray(truth["root_pos"], np.float64)[told.truth_index]
+    assert ee.clip_drift(c, "2,12")[10.0][0] == pytest.approx(ee.window_drift(told.times, told.root * unit, true, 10.0))

@@ -11,6 +11,7 @@ import torch
 
 from training import export, ort, procedural, sensors as se, skeleton as sk, synthesis as sy, train as tr
 from training.errors import UsageError
+from training.stride_scaling import MEASURED_KEYS
 from training.model import (MirrorEnsemble, ModelConfig, PoseNet, feature_labels, feature_size,
                             with_sensors)
 
@@ -503,7 +504,7 @@ def test_a_masked_six_sensor_network_exports_contract_two_with_every_sensor_requ
 @needs_ort
 def test_re_exporting_the_shipped_checkpoint_reproduces_the_shipped_fp32_model(tmp_path):
     """The unmasked path is the shipped model's: the same weights, inputs, outputs and metadata as
-    the committed file, and the same answers from ONNX Runtime. (Not the same bytes: the committed
+    the committed file (but the stride law, which is measured afterwards), and the same answers from ONNX Runtime. (Not the same bytes: the committed
     file was written by an earlier exporter whose graph names two constants and the initializers
     differently, and the graph's bytes depend on the torch version.)"""
     import onnx
@@ -523,7 +524,9 @@ def test_re_exporting_the_shipped_checkpoint_reproduces_the_shipped_fp32_model(t
         return sorted(numpy_helper.to_array(i).tobytes() for i in m.graph.initializer)
 
     assert io(new) == io(shipped)
-    assert [(p.key, p.value) for p in new.metadata_props] == [(p.key, p.value) for p in shipped.metadata_props]
+    # the stride law is measured after export (training stride-scaling --write), not exported
+    assert [(p.key, p.value) for p in new.metadata_props] == \
+        [(p.key, p.value) for p in shipped.metadata_props if p.key not in MEASURED_KEYS]
     assert weights(new) == weights(shipped)
     ori, acc = export.fixture_inputs(seconds=0.5)
     a = ort.run_onnx(tmp_path / "fp32.onnx", ori, acc)

@@ -237,6 +237,16 @@ namespace Mocap.Imu
         /// <summary>Clear a character's recurrent state and root motion (after a new calibration).</summary>
         public void ResetCharacter(int character) => _runner?.ResetCharacter(character);
 
+        /// <summary>
+        /// Change a running character's performer height (metres, 0: the model's training height),
+        /// e.g. from an in-game menu; the settings' value applies at the next start.
+        /// </summary>
+        public void SetPerformerHeight(int character, float heightMeters)
+        {
+            if (_runner == null) throw new InvalidOperationException("the session is not running");
+            _runner.SetCharacterHeight(character, heightMeters);
+        }
+
         /// <summary>Save a character's calibration (load it later through the settings' calibration file).</summary>
         public void SaveCalibration(int character, string path)
         {

@@ -88,6 +88,11 @@ namespace Mocap.Imu
         [Tooltip("Serial/HID: reopen the device after an unplug.")]
         public bool autoReconnect = true;
 
+        [Tooltip("The performer's standing height in metres (1 to 2.5), or 0 for the model's training height " +
+                 "(about 1.72 m). A taller or shorter performer's root then travels as far for the avatar's body " +
+                 "as they did for theirs, so planted feet do not slide. Needs a model with stride scaling (the shipped ones).")]
+        [Min(0f)] public float performerHeight = 0f;
+
         /// <summary>
         /// The engine config for this source. Main thread (paths resolve through Application);
         /// the session component sets the output rate to the model's.
@@ -149,6 +154,7 @@ namespace Mocap.Imu
             Name = name,
             Config = ToSessionConfig(0f, null),
             CalibrationFile = string.IsNullOrEmpty(calibrationFile) ? null : MocapSettings.ResolvePath(calibrationFile),
+            HeightMeters = performerHeight,
             PlaybackWindows = source == MocapSourceKind.Replay && playbackCalibrationWindows
                 ? new PlaybackCalibrationWindows(playbackHeadingStart, playbackHeadingSeconds, playbackTPoseStart, playbackTPoseSeconds)
                 : (PlaybackCalibrationWindows?)null,

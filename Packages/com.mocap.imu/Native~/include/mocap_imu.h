@@ -47,7 +47,7 @@ extern "C" {
 #endif
 
 #define MOCAP_API_VERSION 6
-#define MOCAP_API_VERSION_MINOR 0
+#define MOCAP_API_VERSION_MINOR 1
 /* The most sensors one session (one character) carries: a HiPNUC gateway's limit. A session's
  * own count comes from its config; no array below is filled beyond it. */
 #define MOCAP_MAX_SENSORS 16
@@ -481,6 +481,20 @@ MOCAP_API mocap_status mocap_model_get_info(const mocap_model *model, mocap_mode
 /* Not while a solver uses it. NULL accepted. */
 MOCAP_API void mocap_model_close(mocap_model *model);
 
+/* Performer heights the engine accepts, metres (a model's training height too). */
+#define MOCAP_HEIGHT_MIN_M 1.0f
+#define MOCAP_HEIGHT_MAX_M 2.5f
+
+/* (API 6.1) How a model's root speed follows the performer's size, from its optional metadata
+ * mocap.training_height (the standing height of the body it learned, metres) and
+ * mocap.stride_exponent (e: a performer S = height / training_height times that size moves
+ * about S^e times as fast as the model predicts; 1 would mean the model cannot tell sizes apart,
+ * 0 that it reads size perfectly from the accelerations). MOCAP_ERR_UNSUPPORTED when the model
+ * does not carry them (mocap_solver_set_character_height then refuses heights). Any thread. */
+MOCAP_API mocap_status mocap_model_get_stride_scaling(const mocap_model *model,
+                                                      float *training_height_m,
+                                                      float *stride_exponent);
+
 /* Solver: runs the model for several characters (each a session: device + calibration) on its
  * own thread, batched in one inference call per tick, and turns the outputs into poses with
  * root motion and contact-based drift correction. */
@@ -518,7 +532,7 @@ typedef struct mocap_pose {
     float joint_rotations[MOCAP_JOINT_COUNT][4]; /* joint 0 global (model frame), others local */
     float joint_positions[MOCAP_JOINT_COUNT][3]; /* world, model frame, metres */
     float root_position[3];
-    float root_velocity[3];       /* model output, m/s */
+    float root_velocity[3];       /* model output, m/s (times the height's stride gain) */
     float foot_contact[2];        /* probabilities, left/right */
     int64_t newest_receive_ns;    /* bytes that fed the input frame arrived (session clock) */
     int64_t frame_emitted_ns;     /* the input frame was assembled */
@@ -555,6 +569,16 @@ MOCAP_API mocap_status mocap_solver_drain(mocap_solver *solver, int32_t characte
 /* Clears a character's recurrent state and root motion (e.g. after a new calibration). Any
  * thread; takes effect before its next frame. */
 MOCAP_API mocap_status mocap_solver_reset_character(mocap_solver *solver, int32_t character);
+/* (API 6.1) The performer's standing height in metres (MOCAP_HEIGHT_MIN_M..MOCAP_HEIGHT_MAX_M),
+ * or 0 for the model's own training height (the default). The pose keeps the model's skeleton;
+ * the root's velocity is scaled by S^(e-1), S = height / training_height, e the model's stride
+ * exponent (mocap_model_get_stride_scaling), so the root moves as far for the skeleton as the
+ * performer did for their body and planted feet do not slide: a performer taller than the
+ * training body is read by the model as taking longer strides than the skeleton can. A model
+ * without stride scaling refuses a height with MOCAP_ERR_UNSUPPORTED (0 is always accepted).
+ * Any thread; takes effect from the character's next frame. */
+MOCAP_API mocap_status mocap_solver_set_character_height(mocap_solver *solver, int32_t character,
+                                                         float height_m);
 
 /* Counters and health of a solver. A frame whose inference fails (ONNX Runtime out of memory,
  * a model that cannot run these inputs) keeps the character's previous pose and state and is

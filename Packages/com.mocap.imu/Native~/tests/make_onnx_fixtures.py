@@ -33,6 +33,10 @@ chest (`mocap.sensor_order` pelvis,left_wrist,right_wrist,left_shin,right_shin,h
 so a test sees which sensors the engine marked present, that the chest reached joint 9, and what
 the engine fed as the chest's acceleration.
 
+`stride_scaled` is `valid` with the optional stride scaling (`mocap.training_height` 1.70,
+`mocap.stride_exponent` 0.6); `stride_height_only` gives the height alone and
+`stride_bad_exponent` an exponent of 3, both refused.
+
 The other variants break the contract in one way each; the engine must refuse them with a
 message naming the difference. Every variant is checked with onnx.checker (the defects are in
 the contract, not in ONNX). Needs only the `onnx` Python package (Debian python3-onnx).
@@ -63,7 +67,8 @@ VARIANTS = ["valid", "wrong_input_name", "wrong_rank", "missing_metadata", "miss
             "wrong_version", "state_mismatch", "fixed_batch", "wrong_joint_name", "symbolic_dims",
             "wrong_output_shape", "rank_nine_output", "fails_on_impact", "v1_with_mask",
             "v2_chest", "v2_unknown_segment", "v2_required_length", "v2_missing_mask",
-            "v2_wrong_sensor_dim", "v2_duplicate_segment", "int8_precision", "unknown_precision"]
+            "v2_wrong_sensor_dim", "v2_duplicate_segment", "int8_precision", "unknown_precision",
+            "stride_scaled", "stride_height_only", "stride_bad_exponent"]
 
 
 def metadata(**override):
@@ -285,6 +290,12 @@ def build(variant="valid"):
             override["precision"] = "int8"
         if variant == "unknown_precision":
             override["precision"] = "bf16"
+        if variant in ("stride_scaled", "stride_height_only", "stride_bad_exponent"):
+            override["training_height"] = "1.70"
+        if variant == "stride_scaled":
+            override["stride_exponent"] = "0.6"
+        if variant == "stride_bad_exponent":
+            override["stride_exponent"] = "3"
         if variant == "wrong_joint_name":
             names = list(JOINTS)
             names[18] = "left_forearm"

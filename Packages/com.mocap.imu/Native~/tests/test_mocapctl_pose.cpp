@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -184,13 +185,49 @@ TEST_F(MocapctlPose, SmoothingOptionLowersJitterAndRejectsBadValues)
     };
     double raw = jitter(" --smoothing 0"), standard = jitter(""), strong = jitter(" --smoothing 0.5,0.5");
     EXPECT_GT(raw, 0.0);
-    // The default (1 Hz, beta 6) lets fast swings through; on this walk it takes out ~half.
+    // The default (2 Hz, beta 12) lets fast swings through; on this walk it takes out ~half.
     EXPECT_LT(standard, raw / 1.5) << "raw " << raw << " default " << standard;
     EXPECT_LT(strong, standard) << "default " << standard << " 0.5,0.5 " << strong;
     for (const char *bad : {"abc", "1,", "-1", "1,-2", "nan"}) {
         Result r = mocapctl("replay " + capture + " --truth " + truth_csv + " --smoothing " + bad);
         EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
         EXPECT_NE(r.output.find("--smoothing wants"), std::string::npos) << r.output;
+    }
+}
+
+// --height scales every pose's root velocity by the shipped model's stride law and leaves the
+// pose alone; values outside 1..2.5 m are refused before anything runs.
+TEST_F(MocapctlPose, HeightOptionScalesTheRootVelocityAndRejectsBadValues)
+{
+    const std::string own = dir + "/own.jsonl", tall = dir + "/tall.jsonl";
+    Result r = mocapctl("replay " + capture + " --json " + own);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = mocapctl("replay " + capture + " --height 1.95 --json " + tall);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    Result info = mocapctl("model-info " + kShippedModel.string());
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(info.output, m, std::regex("training_height ([0-9.]+) m, exponent ([0-9.]+)")))
+        << info.output;
+    const double gain = std::pow(1.95 / std::stod(m[1]), std::stod(m[2]) - 1.0);
+    EXPECT_LT(gain, 0.99);
+    Result check = run("\"" + py + "\" -c \"import json,sys\n"
+                       "own=[json.loads(l) for l in open(sys.argv[1])]\n"
+                       "tall=[json.loads(l) for l in open(sys.argv[2])]\n"
+                       "g=float(sys.argv[3])\n"
+                       "assert len(own)==len(tall)>300\n"
+                       "moving=0\n"
+                       "for a,b in zip(own,tall):\n"
+                       "    assert a['joint_rotations']==b['joint_rotations']\n"
+                       "    for x,y in zip(a['root_velocity'],b['root_velocity']):\n"
+                       "        assert abs(g*x-y)<2e-6+1e-5*abs(x),(x,y)\n"
+                       "    moving+=abs(a['root_velocity'][0])+abs(a['root_velocity'][2])>0.1\n"
+                       "print(moving)\" " + own + " " + tall + " " + std::to_string(gain));
+    ASSERT_EQ(check.exit_code, 0) << check.output;
+    EXPECT_GT(std::stoi(check.output), 100) << "the walk moves the root";
+    for (const char *bad : {"abc", "0.5", "3", "1.8m", "nan"}) {
+        r = mocapctl("replay " + capture + " --json " + dir + "/bad.jsonl --height " + bad);
+        EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find("--height wants the performer's standing height"), std::string::npos) << r.output;
     }
 }
 

@@ -478,7 +478,7 @@ TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion
               MOCAP_ERR_UNSUPPORTED);
     EXPECT_NE(std::string(mocap_last_error()).find("session counter 15 is not known"), std::string::npos)
         << mocap_last_error();
-    EXPECT_NE(std::string(mocap_last_error()).find("API 6.0"), std::string::npos) << mocap_last_error();
+    EXPECT_NE(std::string(mocap_last_error()).find("API 6.1"), std::string::npos) << mocap_last_error();
     EXPECT_EQ(value, 7u);
     EXPECT_EQ(mocap_session_get_counter(sessions.list[0], -1, &value), MOCAP_ERR_UNSUPPORTED);
     EXPECT_EQ(mocap_solver_get_counter(solver.s, -1, MOCAP_SOLVER_COUNTER_COUNT, &value), MOCAP_ERR_UNSUPPORTED);
@@ -780,6 +780,130 @@ TEST(Solver, InferenceFailuresAreCountedWithTheirCause)
     EXPECT_FALSE(poses[4].flags & MOCAP_POSE_INCOMPLETE);
 }
 
+// The performer's height scales one character's root velocity by (height / training height)^(e-1)
+// from the model's metadata (stride_scaled: 1.70 m, e = 0.6) and its root integrates the scaled
+// velocity; the other character, and the same one set back to 0, keep the model's own.
+TEST(Solver, PerformerHeightScalesTheRootVelocityByTheModelsStrideLaw)
+{
+    REQUIRE_ORT();
+    std::string dir = test_temp_dir();
+    ASSERT_TRUE(write_onnx_fixtures(dir));
+    Model model;
+    ASSERT_EQ(open_model(dir + "/stride_scaled.onnx", &model.m), MOCAP_OK) << mocap_last_error();
+    float training_height = 0, exponent = 0;
+    ASSERT_EQ(mocap_model_get_stride_scaling(model.m, &training_height, &exponent), MOCAP_OK);
+    EXPECT_FLOAT_EQ(training_height, 1.70f);
+    EXPECT_FLOAT_EQ(exponent, 0.6f);
+
+    std::string cap = dir + "/height.cap";
+    synth_config cfg = short_capture(62, 1.0, "walk", cap);
+    Sessions sessions;  // never started: only their rates are used
+    sessions.list.push_back(open_replay(cap, cfg));
+    sessions.list.push_back(open_replay(cap, cfg));
+    mocap_solver_config config;
+    mocap_solver_config_defaults(&config);
+    config.drift_correction = 0;  // the root is then the pure integral of the velocity
+    config.smoothing_min_cutoff_hz = 0;
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, &config, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ids[2] = {-1, -1};
+    for (int c = 0; c < 2; ++c) {
+        ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[c], &ids[c]), MOCAP_OK);
+    }
+    ASSERT_EQ(mocap_solver_set_character_height(solver.s, ids[1], 1.87f), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
+    const double gain = std::pow(1.87 / 1.70, 0.6 - 1.0);
+
+    mocap_frame f = calibrated_six_frame();
+    const int frames = 6;
+    for (int i = 0; i < frames; ++i) {
+        if (i == 4) {
+            ASSERT_EQ(mocap_solver_set_character_height(solver.s, ids[1], 0.0f), MOCAP_OK);
+        }
+        f.sequence = (uint64_t)i;
+        f.time_s = 1.0 + i / 60.0;
+        f.sensors[0].bone_acceleration[0] = 0.2f * (float)(i + 1);
+        const mocap_frame *both[2] = {&f, &f};
+        ASSERT_EQ(solver_solve(solver.s, ids, both, nullptr, 2), MOCAP_OK) << mocap_last_error();
+    }
+    std::vector<mocap_pose> poses[2];
+    for (int c = 0; c < 2; ++c) {
+        poses[c].resize(16);
+        uint32_t n = 0;
+        ASSERT_EQ(mocap_solver_drain(solver.s, ids[c], poses[c].data(), 16, &n), MOCAP_OK);
+        ASSERT_EQ(n, (uint32_t)frames);
+    }
+    for (int i = 0; i < frames; ++i) {
+        SCOPED_TRACE(i);
+        const double g = i < 4 ? gain : 1.0;
+        const mocap_pose &own = poses[0][i], &tall = poses[1][i];
+        ASSERT_GT(std::fabs(own.root_velocity[0]), 0.05f);  // something to scale
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(tall.root_velocity[k], g * own.root_velocity[k], 1e-5 * (1 + std::fabs(own.root_velocity[k])));
+            if (i == 0) continue;
+            const double step_own = own.root_position[k] - poses[0][i - 1].root_position[k];
+            const double step_tall = tall.root_position[k] - poses[1][i - 1].root_position[k];
+            EXPECT_NEAR(step_tall, g * step_own, 1e-5 * (1 + std::fabs(step_own)));
+        }
+        // The pose itself is the model's either way.
+        EXPECT_EQ(0, memcmp(own.joint_rotations, tall.joint_rotations, sizeof own.joint_rotations));
+    }
+}
+
+// Heights outside 1..2.5 m, unknown characters and models without stride scaling are refused
+// naming the reason; 0 (the model's own) is always accepted; half the metadata, or an exponent
+// outside 0..2, is a malformed model.
+TEST(Solver, HeightIsRefusedOutsideItsRangeAndWithoutStrideScaling)
+{
+    REQUIRE_ORT();
+    std::string dir = test_temp_dir();
+    ASSERT_TRUE(write_onnx_fixtures(dir));
+    std::string cap = dir + "/height.cap";
+    synth_config cfg = short_capture(63, 1.0, "walk", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));
+    sessions.list.push_back(open_replay(cap, cfg));
+
+    Model plain;
+    ASSERT_EQ(open_model(dir + "/valid.onnx", &plain.m), MOCAP_OK) << mocap_last_error();
+    float h = -1, e = -1;
+    EXPECT_EQ(mocap_model_get_stride_scaling(plain.m, &h, &e), MOCAP_ERR_UNSUPPORTED);
+    Solver without;
+    ASSERT_EQ(mocap_solver_open(plain.m, nullptr, &without.s), MOCAP_OK);
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(without.s, sessions.list[0], &ch), MOCAP_OK);
+    EXPECT_EQ(mocap_solver_set_character_height(without.s, ch, 1.8f), MOCAP_ERR_UNSUPPORTED);
+    std::string err = mocap_last_error();
+    EXPECT_NE(err.find("mocap.training_height"), std::string::npos) << err;
+    EXPECT_NE(err.find("fixture"), std::string::npos) << err;
+    EXPECT_EQ(mocap_solver_set_character_height(without.s, ch, 0.0f), MOCAP_OK);
+
+    Model scaled;
+    ASSERT_EQ(open_model(dir + "/stride_scaled.onnx", &scaled.m), MOCAP_OK) << mocap_last_error();
+    Solver with;
+    ASSERT_EQ(mocap_solver_open(scaled.m, nullptr, &with.s), MOCAP_OK);
+    ASSERT_EQ(mocap_solver_add_character(with.s, sessions.list[1], &ch), MOCAP_OK);
+    for (float bad : {0.5f, 0.99f, 2.6f, -1.8f, NAN, INFINITY}) {
+        SCOPED_TRACE(bad);
+        EXPECT_EQ(mocap_solver_set_character_height(with.s, ch, bad), MOCAP_ERR_INVALID_ARGUMENT);
+        EXPECT_NE(std::string(mocap_last_error()).find("1..2.5 m"), std::string::npos) << mocap_last_error();
+    }
+    EXPECT_EQ(mocap_solver_set_character_height(with.s, ch, 1.0f), MOCAP_OK);
+    EXPECT_EQ(mocap_solver_set_character_height(with.s, ch, 2.5f), MOCAP_OK);
+    EXPECT_EQ(mocap_solver_set_character_height(with.s, ch + 1, 1.8f), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(mocap_solver_set_character_height(nullptr, 0, 1.8f), MOCAP_ERR_INVALID_ARGUMENT);
+
+    for (const char *file : {"stride_height_only.onnx", "stride_bad_exponent.onnx"}) {
+        SCOPED_TRACE(file);
+        mocap_model *m = nullptr;
+        EXPECT_EQ(open_model(dir + "/" + file, &m), MOCAP_ERR_FORMAT);
+        EXPECT_EQ(m, nullptr);
+        err = mocap_last_error();
+        EXPECT_NE(err.find("mocap.stride_exponent"), std::string::npos) << err;
+        EXPECT_NE(err.find(file), std::string::npos) << err;
+    }
+}
+
 // NaN/Inf in a frame: the frame is not fed to the model, the previous pose is held and flagged,
 // and the recurrent state never sees it.
 TEST(Solver, NonFiniteInputFramesAreNotFed)
@@ -945,7 +1069,7 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
     EXPECT_EQ(mocap_api_version(), 6);        // 6: sensor sets (counts, segments, states)
-    EXPECT_EQ(mocap_api_version_minor(), 0);
+    EXPECT_EQ(mocap_api_version_minor(), 1);  // 6.1: performer height (stride scaling)
     // The sensor-set fields a binding mirrors are in the table too.
     const mocap_field_layout *count = find("mocap_frame", "sensor_count");
     ASSERT_NE(count, nullptr);

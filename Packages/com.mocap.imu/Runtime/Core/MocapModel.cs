@@ -75,8 +75,10 @@ namespace Mocap.Imu
     /// <summary>What a model's metadata says (mocap_model_info), validated by the engine at load.</summary>
     public sealed class ModelInfo
     {
-        internal unsafe ModelInfo(in NativeModelInfo native)
+        internal unsafe ModelInfo(in NativeModelInfo native, float trainingHeight = 0f, float strideExponent = 0f)
         {
+            TrainingHeight = trainingHeight;
+            StrideExponent = strideExponent;
             const int J = NativeSolverMethods.JointCount;
             var names = new string[J];
             var parents = new int[J];
@@ -138,6 +140,22 @@ namespace Mocap.Imu
         public IReadOnlyList<Vec3> RestOffsets { get; }
         /// <summary>The model's skeleton (its proportions) with forward kinematics.</summary>
         public SmplSkeleton Skeleton { get; }
+
+        /// <summary>
+        /// Standing height (metres) of the body the model learned; 0 when the model has no stride
+        /// scaling and therefore takes no performer height (<see cref="MocapSolver.SetCharacterHeight"/>).
+        /// </summary>
+        public float TrainingHeight { get; }
+
+        /// <summary>
+        /// How the model's root speed follows the performer's size: someone S = height /
+        /// <see cref="TrainingHeight"/> times that size moves about S^e times as fast as it
+        /// predicts. 0 without stride scaling.
+        /// </summary>
+        public float StrideExponent { get; }
+
+        /// <summary>Whether the model takes a performer height (its metadata gives the two above).</summary>
+        public bool HasStrideScaling => TrainingHeight > 0f;
 
         static SmplSkeleton BuildSkeleton(string[] names, int[] parents, Vec3[] offsets)
         {
@@ -207,7 +225,11 @@ namespace Mocap.Imu
             {
                 NativeModelInfo info;
                 NativeMethods.Check(NativeSolverMethods.mocap_model_get_info(handle, &info));
-                return new MocapModel(path, handle, new ModelInfo(in info));
+                float height = 0f, exponent = 0f;
+                MocapStatus scaling = NativeSolverMethods.mocap_model_get_stride_scaling(handle, &height, &exponent);
+                if (scaling == MocapStatus.Unsupported) height = exponent = 0f;
+                else NativeMethods.Check(scaling);
+                return new MocapModel(path, handle, new ModelInfo(in info, height, exponent));
             }
             catch
             {

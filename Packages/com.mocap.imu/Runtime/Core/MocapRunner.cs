@@ -47,6 +47,9 @@ namespace Mocap.Imu
         public string CalibrationFile;
         /// <summary>Replay: the capture's own calibration windows, scheduled when nothing else calibrates it.</summary>
         public PlaybackCalibrationWindows? PlaybackWindows;
+        /// <summary>The performer's standing height, metres (0: the model's training height);
+        /// see <see cref="MocapSolver.SetCharacterHeight"/>.</summary>
+        public float HeightMeters;
     }
 
     /// <summary>What a <see cref="MocapRunner"/> opens: read from the settings on the main thread.</summary>
@@ -290,7 +293,19 @@ namespace Mocap.Imu
                     }
                 }
                 engine.Solver = MocapSolver.Open(engine.Model, r.Plan.SolverConfig);
-                foreach (var session in engine.Sessions) engine.Solver.AddCharacter(session);
+                for (int c = 0; c < engine.Sessions.Length; c++)
+                {
+                    int character = engine.Solver.AddCharacter(engine.Sessions[c]);
+                    float height = r.Plan.Characters[c].HeightMeters;
+                    try
+                    {
+                        engine.Solver.SetCharacterHeight(character, height);
+                    }
+                    catch (MocapException e)
+                    {
+                        throw new MocapException(e.Status, $"character '{r.Plan.Characters[c].Name}': performer height {height:0.###} m: {e.Message}", e);
+                    }
+                }
                 engine.Solver.Start();
                 foreach (var session in engine.Sessions) session.Start();
                 return engine;
@@ -503,6 +518,18 @@ namespace Mocap.Imu
 
         /// <summary>Clear a character's recurrent state and root motion (after a new calibration).</summary>
         public void ResetCharacter(int character) => _engine?.Solver?.ResetCharacter(character);
+
+        /// <summary>
+        /// Change a running character's performer height (metres, 0: the model's training height),
+        /// e.g. from a menu where a player enters it; from their next frame.
+        /// </summary>
+        /// <exception cref="InvalidOperationException">Not running.</exception>
+        /// <exception cref="MocapException">Out of range, or a model without stride scaling.</exception>
+        public void SetCharacterHeight(int character, float heightMeters)
+        {
+            var solver = _engine?.Solver ?? throw new InvalidOperationException("the session is not running");
+            solver.SetCharacterHeight(character, heightMeters);
+        }
 
         /// <summary>Save a character's calibration (load it later as a character's calibration file).</summary>
         public void SaveCalibration(int character, string path)

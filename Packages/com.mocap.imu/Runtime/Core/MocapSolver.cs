@@ -239,6 +239,27 @@ namespace Mocap.Imu
         }
 
         /// <summary>
+        /// The performer's standing height in metres (<see cref="MinHeight"/> to
+        /// <see cref="MaxHeight"/>), or 0 for the model's own training height (the default).
+        /// The pose keeps the model's skeleton; the root moves as far for that skeleton as the
+        /// performer did for their body, so a tall performer's strides no longer slide the feet.
+        /// Needs a model with <see cref="ModelInfo.HasStrideScaling"/>. Any thread; takes effect
+        /// from the character's next frame.
+        /// </summary>
+        /// <exception cref="MocapException">A height out of range (InvalidArgument) or a model
+        /// without stride scaling (Unsupported), with the engine's reason.</exception>
+        public void SetCharacterHeight(int character, float heightMeters)
+        {
+            NativeMethods.Check(NativeSolverMethods.mocap_solver_set_character_height(Handle, character, heightMeters));
+        }
+
+        /// <summary>MOCAP_HEIGHT_MIN_M: the shortest performer height accepted, metres.</summary>
+        public const float MinHeight = 1.0f;
+
+        /// <summary>MOCAP_HEIGHT_MAX_M: the tallest performer height accepted, metres.</summary>
+        public const float MaxHeight = 2.5f;
+
+        /// <summary>
         /// Counters and health of the solver: over all characters (<paramref name="character"/>
         /// -1) or one character's frame counters (ticks, timings and failure texts are
         /// solver-wide). A failed inference is only visible here (it happens on the engine's

@@ -89,6 +89,20 @@ mocap_status mocap_model_get_info(const mocap_model *m, mocap_model_info *out)
     return MOCAP_OK;
 }
 
+mocap_status mocap_model_get_stride_scaling(const mocap_model *m, float *training_height_m,
+                                            float *stride_exponent)
+{
+    if (!m || !training_height_m || !stride_exponent)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "model or an out pointer is NULL");
+    const ort_model_info *oi = ort_model_get_info(m->ort);
+    if (!oi || !oi->has_stride_scaling)
+        return mocap_fail(MOCAP_ERR_UNSUPPORTED, "model '%s' has no stride scaling (metadata "
+                          "mocap.training_height and mocap.stride_exponent)", m->info.model_name);
+    *training_height_m = (float)oi->training_height;
+    *stride_exponent = (float)oi->stride_exponent;
+    return MOCAP_OK;
+}
+
 void mocap_model_close(mocap_model *m)
 {
     if (!m) return;

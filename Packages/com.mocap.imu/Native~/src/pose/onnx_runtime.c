@@ -382,6 +382,31 @@ static mocap_status parse_sensor_set(ort_model_info *info, const char *path, cha
     return MOCAP_OK;
 }
 
+/* The optional pair mocap.training_height / mocap.stride_exponent: both or neither. */
+static mocap_status parse_stride_scaling(ort_model_info *info, const char *path,
+                                         const char *height_text, const char *exponent_text)
+{
+    info->has_stride_scaling = 0;
+    if (!height_text && !exponent_text) return MOCAP_OK;
+    if (!height_text || !exponent_text)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.%s is given without mocap.%s (the "
+                          "two come together)", path,
+                          height_text ? "training_height" : "stride_exponent",
+                          height_text ? "stride_exponent" : "training_height");
+    double height, exponent;
+    if (!parse_double(height_text, &height) || height < MOCAP_HEIGHT_MIN_M || height > MOCAP_HEIGHT_MAX_M)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.training_height '%s' is not a "
+                          "standing height in metres (%g..%g)", path, height_text,
+                          (double)MOCAP_HEIGHT_MIN_M, (double)MOCAP_HEIGHT_MAX_M);
+    if (!parse_double(exponent_text, &exponent) || exponent < 0.0 || exponent > 2.0)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.stride_exponent '%s' is not a "
+                          "number in 0..2", path, exponent_text);
+    info->has_stride_scaling = 1;
+    info->training_height = height;
+    info->stride_exponent = exponent;
+    return MOCAP_OK;
+}
+
 static mocap_status read_metadata(ort_model *m)
 {
     OrtModelMetadata *md = NULL;
@@ -394,6 +419,8 @@ static mocap_status read_metadata(ort_model *m)
     mocap_status r = MOCAP_OK;
     for (int k = 0; k < KEY_COUNT; ++k) values[k] = metadata_value(md, alloc, REQUIRED_KEYS[k]);
     char *required = metadata_value(md, alloc, "mocap.sensor_required");
+    char *training_height = metadata_value(md, alloc, "mocap.training_height");
+    char *stride_exponent = metadata_value(md, alloc, "mocap.stride_exponent");
     g_api->ReleaseModelMetadata(md);
     ort_model_info *info = &m->info;
     const char *path = m->path;
@@ -515,9 +542,12 @@ static mocap_status read_metadata(ort_model *m)
     }
     snprintf(info->precision, sizeof info->precision, "%s", values[8]);
     snprintf(info->model_name, sizeof info->model_name, "%s", values[9]);
+    r = parse_stride_scaling(info, path, training_height, stride_exponent);
 done:
     for (int k = 0; k < KEY_COUNT; ++k) free(values[k]);
     free(required);
+    free(training_height);
+    free(stride_exponent);
     return r;
 }
 

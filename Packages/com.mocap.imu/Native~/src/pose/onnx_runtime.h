@@ -79,6 +79,11 @@ typedef struct ort_model_info {
     int32_t sensor_segments[MOCAP_MAX_SENSORS];
     uint32_t required_mask;                  /* bit k: sensor k must be present */
     int has_mask;                            /* contract 2: the imu_mask input */
+    /* Optional (has_stride_scaling 0 when the model gives neither): the standing height of the
+     * body the model learned, metres, and how its root speed follows a performer's size. */
+    int has_stride_scaling;
+    double training_height;
+    double stride_exponent;
 } ort_model_info;
 
 typedef struct ort_model ort_model;

@@ -45,6 +45,8 @@ typedef struct character {
 
     mocap_atomic_int ended;     /* the session ended and every pose was pushed */
     mocap_atomic_int reset_requested;
+    /* The root velocity's factor for the performer's height (a double's bits; 1 by default). */
+    mocap_atomic_u64 velocity_gain_bits;
     mocap_atomic_u64 frames_solved, frames_uncalibrated, frames_nonfinite, outputs_nonfinite,
         poses_dropped, run_failures;
 
@@ -215,6 +217,20 @@ static void hold_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t 
     push_pose(ch, p);
 }
 
+static uint64_t double_to_bits(double v)
+{
+    uint64_t bits;
+    memcpy(&bits, &v, sizeof bits);
+    return bits;
+}
+
+static double bits_to_double(uint64_t bits)
+{
+    double v;
+    memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
 static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns,
                        const float *rot, const float *vel, const float *contact)
 {
@@ -228,7 +244,8 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
     const double zero[3] = {0, 0, 0};
     skeleton_fk(&s->sk, (const double (*)[4])q, zero, NULL, rel);
     if (!ch->drift.initialized) drift_reset(&ch->drift, s->sk.offsets[0]);
-    double v[3] = {vel[0], vel[1], vel[2]};
+    const double gain = bits_to_double(mocap_atomic_load_u64(&ch->velocity_gain_bits));
+    double v[3] = {vel[0] * gain, vel[1] * gain, vel[2] * gain};
     double p[2] = {contact[0], contact[1]};
     double feet[2][3];
     memcpy(feet[0], rel[SKELETON_LEFT_FOOT], sizeof feet[0]);
@@ -253,7 +270,7 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
     }
     for (int k = 0; k < 3; ++k) {
         pose->root_position[k] = (float)root[k];
-        pose->root_velocity[k] = vel[k];
+        pose->root_velocity[k] = (float)v[k];
     }
     pose->foot_contact[0] = contact[0];
     pose->foot_contact[1] = contact[1];
@@ -610,6 +627,7 @@ mocap_status mocap_solver_add_character(mocap_solver *s, mocap_session *session,
     memcpy(ch->slot_of, slot_of, sizeof slot_of);
     ch->replay = sc->source_kind == MOCAP_SOURCE_REPLAY;
     ch->replay_fast = ch->replay && !sc->replay_realtime;
+    mocap_atomic_store_u64(&ch->velocity_gain_bits, double_to_bits(1.0));
     s->chars[s->count] = ch;
     if (character_out) *character_out = s->count;
     s->count++;
@@ -743,6 +761,25 @@ mocap_status mocap_solver_reset_character(mocap_solver *s, int32_t c)
     mocap_status st = check_character(s, c);
     if (st != MOCAP_OK) return st;
     mocap_atomic_store_int(&s->chars[c]->reset_requested, 1);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_set_character_height(mocap_solver *s, int32_t c, float height_m)
+{
+    mocap_status st = check_character(s, c);
+    if (st != MOCAP_OK) return st;
+    double gain = 1.0;
+    if (height_m != 0.0f) {
+        if (!(height_m >= MOCAP_HEIGHT_MIN_M && height_m <= MOCAP_HEIGHT_MAX_M))
+            return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "height %g m is outside %g..%g m (0: the "
+                              "model's own)", (double)height_m, (double)MOCAP_HEIGHT_MIN_M,
+                              (double)MOCAP_HEIGHT_MAX_M);
+        float training_height, exponent;
+        st = mocap_model_get_stride_scaling(s->model, &training_height, &exponent);
+        if (st != MOCAP_OK) return st; /* names the model and the missing metadata */
+        gain = pow((double)height_m / (double)training_height, (double)exponent - 1.0);
+    }
+    mocap_atomic_store_u64(&s->chars[c]->velocity_gain_bits, double_to_bits(gain));
     return MOCAP_OK;
 }
 

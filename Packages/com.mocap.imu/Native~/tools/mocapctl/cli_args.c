@@ -181,6 +181,42 @@ void cli_refuse_overwriting(const char *input, const char *input_what, int argc,
     }
 }
 
+int cli_height(int argc, char **argv, float *out)
+{
+    *out = 0.0f;
+    const char *text = cli_value(argc, argv, "--height");
+    if (!text) return 0;
+    char *end = NULL;
+    double m = strtod(text, &end);
+    if (end == text || *end != '\0' || !(m >= MOCAP_HEIGHT_MIN_M && m <= MOCAP_HEIGHT_MAX_M)) {
+        fprintf(stderr, "mocapctl: --height wants the performer's standing height in metres, "
+                        "%g to %g, got '%s'\n", (double)MOCAP_HEIGHT_MIN_M,
+                (double)MOCAP_HEIGHT_MAX_M, text);
+        return 2;
+    }
+    *out = (float)m;
+    return 0;
+}
+
+int height_supported(const mocap_model *model, float height_m)
+{
+    float training_height, exponent;
+    if (height_m == 0.0f ||
+        mocap_model_get_stride_scaling(model, &training_height, &exponent) == MOCAP_OK)
+        return 0;
+    fprintf(stderr, "mocapctl: --height %g: %s\n", (double)height_m, mocap_last_error());
+    return 1;
+}
+
+int apply_height(mocap_solver *solver, int32_t character, float height_m)
+{
+    if (height_m == 0.0f) return 0;
+    mocap_status s = mocap_solver_set_character_height(solver, character, height_m);
+    if (s == MOCAP_OK) return 0;
+    fprintf(stderr, "mocapctl: --height %g: %s\n", (double)height_m, mocap_last_error());
+    return 1;
+}
+
 int cli_smoothing(int argc, char **argv, mocap_solver_config *out)
 {
     mocap_solver_config_defaults(out);

@@ -45,5 +45,17 @@ void cli_refuse_overwriting(const char *input, const char *input_what, int argc,
  * output filter's cut-off at rest, Hz, and its rise per rad/s of joint speed; 0 = the model's
  * raw output). 0, or 2 (a usage error, printed). */
 int cli_smoothing(int argc, char **argv, mocap_solver_config *out);
+/* --height M (the performer's standing height, metres): *out = M, or 0 when absent; 2 (and a
+ * message) when M is not a number in MOCAP_HEIGHT_MIN_M..MOCAP_HEIGHT_MAX_M, else 0. */
+int cli_height(int argc, char **argv, float *out);
+#define HEIGHT_HELP                                                                              \
+    "  --height M           the performer's standing height, metres: the root moves for the\n"   \
+    "                       model's skeleton as far as they did for their body (needs a model\n" \
+    "                       with stride scaling; default: the model's training height)\n"
+/* Applies a height from cli_height to a solver's character (nothing for 0); 0, or 1 with the
+ * engine's reason (e.g. a model without stride scaling). */
+int apply_height(mocap_solver *solver, int32_t character, float height_m);
+/* 0 when the model can take the height (always for 0), else 1 with the engine's reason. */
+int height_supported(const mocap_model *model, float height_m);
 
 #endif

@@ -240,6 +240,11 @@ static void print_info(const char *path, const ort_model_info *info)
     }
     printf("%s\n", optional ? "" : "none");
     printf("  imu_mask          %s\n", info->has_mask ? "yes" : "no");
+    if (info->has_stride_scaling)
+        printf("  stride_scaling    training_height %.3f m, exponent %.2f\n", info->training_height,
+               info->stride_exponent);
+    else
+        printf("  stride_scaling    none\n");
     printf("  state             layers %d, size %d\n", info->state_layers, info->state_size);
     printf("  joints            # name parent rest_offset_m\n");
     for (int j = 0; j < ORT_JOINTS; ++j)

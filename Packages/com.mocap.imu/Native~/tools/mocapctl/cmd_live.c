@@ -16,12 +16,16 @@
 /* After calibration with the model: the solver consumes the session; prints the pose status
  * (fps, root position, foot contacts, flags) ten times a second. 0, or 1 when inference failed. */
 static int show_poses_until(mocap_session *session, mocap_model *model,
-                            const mocap_solver_config *config, double limit_s)
+                            const mocap_solver_config *config, float height_m, double limit_s)
 {
     mocap_solver *solver = NULL;
     int32_t id = -1;
     mocap_status s = mocap_solver_open(model, config, &solver);
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &id);
+    if (s == MOCAP_OK && apply_height(solver, id, height_m) != 0) {
+        mocap_solver_close(solver);
+        return 1;
+    }
     if (s == MOCAP_OK) s = mocap_solver_start(solver);
     if (s != MOCAP_OK) {
         mocap_solver_close(solver);
@@ -80,6 +84,8 @@ int cmd_live(int argc, char **argv)
     mocap_session *session = NULL;
     mocap_solver_config solver_config;
     if (cli_smoothing(argc, argv, &solver_config) != 0) return 2;
+    float height = 0.0f;
+    if (cli_height(argc, argv, &height) != 0) return 2;
     const char *record = cli_value(argc, argv, "--record");
     static const char *const live_outputs[] = {"--record", NULL};
     cli_refuse_overwriting(cli_value(argc, argv, "--port"), "serial port", argc, argv, live_outputs);
@@ -89,11 +95,15 @@ int cmd_live(int argc, char **argv)
     mocap_config_defaults(&sensor_check);
     if (sensor_set_from_args(argc, argv, &sensor_check) != 0) return 2; /* before the capture */
     const int with_model = cli_value(argc, argv, "--model") != NULL || cli_flag(argc, argv, "--pose");
-    if (!with_model) cli_refuse_options(argc, argv, "--smoothing", "applies to poses only (add --pose or --model)");
+    if (!with_model) cli_refuse_options(argc, argv, "--smoothing --height", "applies to poses only (add --pose or --model)");
     mocap_model *model = NULL;
     mocap_model_info info;
     /* The model first: the session's output rate is the model's frame rate. */
     if (with_model && pose_model_open(cli_value(argc, argv, "--model"), &model, &info) != 0) return 1;
+    if (model && height_supported(model, height) != 0) { /* before the calibration, not after */
+        mocap_model_close(model);
+        return 1;
+    }
     if (live_session_open("live", argc, argv, record, model ? info.frame_rate : 0.0f,
                           model ? &info : NULL, &session) != 0) {
         mocap_model_close(model);
@@ -117,7 +127,7 @@ int cmd_live(int argc, char **argv)
     if (rc == GUIDED_STEP_NO_FRAMES) {
         rc = 1; /* nothing arrives: showing an empty status would only wait */
     } else if (rc == 0 && model) {
-        rc = show_poses_until(session, model, &solver_config, limit);
+        rc = show_poses_until(session, model, &solver_config, height, limit);
     } else {
         live_session_show_status(session, limit);
     }

@@ -32,6 +32,8 @@ int cmd_stream(int argc, char **argv)
     const char *prelude = cli_value(argc, argv, "--prelude");
     mocap_solver_config solver_config;
     if (cli_smoothing(argc, argv, &solver_config) != 0) return 2;
+    float height = 0.0f;
+    if (cli_height(argc, argv, &height) != 0) return 2;
     mocap_session_config sensor_check;
     mocap_config_defaults(&sensor_check);
     if (sensor_set_from_args(argc, argv, &sensor_check) != 0) return 2; /* before any socket */
@@ -84,6 +86,7 @@ int cmd_stream(int argc, char **argv)
         }
     }
     if (pose_model_open(cli_value(argc, argv, "--model"), &model, &info) != 0) goto done;
+    if (height_supported(model, height) != 0) goto done; /* before a port's calibration */
     poses = (mocap_pose *)malloc((size_t)characters * POSE_DRAIN * sizeof *poses);
     if (!poses) goto done;
 
@@ -119,6 +122,8 @@ int cmd_stream(int argc, char **argv)
     s = mocap_solver_open(model, &solver_config, &solver);
     for (int i = 0; s == MOCAP_OK && i < characters; ++i)
         s = mocap_solver_add_character(solver, sessions[i], &ids[i]);
+    for (int i = 0; s == MOCAP_OK && i < characters; ++i)
+        if (apply_height(solver, ids[i], height) != 0) goto done;
     if (s == MOCAP_OK) s = mocap_solver_start(solver);
     for (int i = 0; !port && s == MOCAP_OK && i < characters; ++i) s = mocap_session_start(sessions[i]);
     if (s != MOCAP_OK) {

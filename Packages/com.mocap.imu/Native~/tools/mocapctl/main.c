@@ -54,7 +54,8 @@ static const mocapctl_command COMMANDS[] = {
      "                      [--sensors LIST]\n"
      "       mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
      "                      [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
-     "                      [--metrics-json ACCURACY.json] [--smoothing HZ[,BETA]] [--sensors LIST]\n"
+     "                      [--metrics-json ACCURACY.json] [--smoothing HZ[,BETA]] [--height M]\n"
+     "                      [--sensors LIST]\n"
      "The first form: decode -> filter -> calibrate, a summary per sensor and, with synth's truth,\n"
      "the bone orientation error. The second runs the pose model too (decode -> filter ->\n"
      "calibrate -> model -> drift correction): chosen by --model, --out, --json, --pose-csv or a\n"
@@ -74,12 +75,13 @@ static const mocapctl_command COMMANDS[] = {
      "  --metrics-json ACCURACY.json  with a pose truth: the accuracy figures as JSON\n"
      "  --smoothing HZ[,BETA]  the output filter's cut-off at rest and its rise per rad/s\n"
      "                       (default 2,12; 0 = the model's raw output)\n"
+     HEIGHT_HELP
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
      cmd_replay},
     {"live", MOCAPCTL_LIVE_OPTIONS, "guided calibration on real sensors, then live status or poses",
      "usage: mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
-     "                    [--smoothing HZ[,BETA]] [--sensors LIST]\n"
+     "                    [--smoothing HZ[,BETA]] [--height M] [--sensors LIST]\n"
      "The heading and T-pose steps with a countdown, then a status line until Ctrl-C.\n"
      "  --port DEV           the receiver's serial port\n"
      "  --baud B             its baud rate\n"
@@ -87,6 +89,7 @@ static const mocapctl_command COMMANDS[] = {
      "  --seconds S          stop after S seconds\n"
      "  --model M, --pose    run the pose model (--pose: the shipped one) and show pose status\n"
      "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off)\n"
+     HEIGHT_HELP
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
      cmd_live},
@@ -102,7 +105,7 @@ static const mocapctl_command COMMANDS[] = {
      "usage: mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...]\n"
      "                      [--speed X | --fast] [--prelude H,S,T] | --port DEV [--baud B]) [--model M]\n"
      "                      [--rate HZ] [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]\n"
-     "                      [--sensors LIST]\n"
+     "                      [--height M] [--sensors LIST]\n"
      "Character i (the i-th --replay, or the one --port) goes to the i-th --vmc.\n"
      "  --vmc HOST:PORT      a receiver (VSeeFace, EVMC4U, VMC4B listen on 39539)\n"
      "  --replay CAPTURE     a character from a capture\n"
@@ -116,6 +119,7 @@ static const mocapctl_command COMMANDS[] = {
      "  --seconds S          stop after S seconds\n"
      "  --allow-remote       allow destinations that are not this machine\n"
      "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off)\n"
+     HEIGHT_HELP
      SENSOR_SET_HELP
      "                       the sensors the model does not require are optional\n",
      cmd_stream},

@@ -28,6 +28,11 @@ namespace Mocap.Imu
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_model_get_info(ModelHandle model, NativeModelInfo* info);
 
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_model_get_stride_scaling(ModelHandle model,
+                                                                          float* trainingHeight,
+                                                                          float* strideExponent);
+
         // Takes the raw pointer: only ModelHandle.ReleaseHandle calls it.
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern void mocap_model_close(IntPtr model);
@@ -62,6 +67,10 @@ namespace Mocap.Imu
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_solver_reset_character(SolverHandle solver, int character);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_solver_set_character_height(SolverHandle solver,
+                                                                             int character, float heightM);
 
         [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_solver_get_stats(SolverHandle solver, int character,

@@ -7,6 +7,7 @@ using System.Collections.Generic;
 using System.Diagnostics;
 using System.IO;
 using Mocap.Imu.Capture;
+using Mocap.Imu.Maths;
 using NUnit.Framework;
 
 namespace Mocap.Imu.Tests
@@ -175,6 +176,41 @@ namespace Mocap.Imu.Tests
             Assert.AreNotEqual(a, runner.GetRecordingPath(0));
             Assert.AreNotEqual(b, runner.GetRecordingPath(1));
             RunUntil(runner, MocapRunnerEvent.Opened);
+        }
+
+        [Test]
+        public void EachCharactersPerformerHeightReachesTheSolver()
+        {
+            // Two characters replay the same capture; Bo is 1.95 m tall: the pose is the same and
+            // Bo's root velocity is the model's times its stride gain. A height out of range fails
+            // the open naming the character.
+            using var runner = new MocapRunner();
+            var velocities = new[] { new List<Vec3>(), new List<Vec3>() };
+            runner.PoseSolved += (int c, in MocapPose pose) => velocities[c].Add(pose.RootVelocity);
+            var bo = Character("Bo", _walk);
+            bo.HeightMeters = 1.95f;
+            Assert.IsTrue(runner.Open(Plan(Character("Ada", _walk), bo)));
+            RunUntil(runner, MocapRunnerEvent.Ended);
+            ModelInfo info;
+            using (var model = MocapModel.Open(TestPaths.ModelPath)) info = model.Info;
+            Assert.IsTrue(info.HasStrideScaling);
+            double gain = Math.Pow(1.95 / info.TrainingHeight, info.StrideExponent - 1.0);
+            Assert.AreEqual(velocities[0].Count, velocities[1].Count);
+            Assert.Greater(velocities[0].Count, 100);
+            for (int i = 0; i < velocities[0].Count; i++)
+                Assert.AreEqual(gain * velocities[0][i].X, velocities[1][i].X, 1e-5 + 1e-5 * Math.Abs(velocities[0][i].X), $"pose {i}");
+            runner.SetCharacterHeight(0, 0f);
+            var e = Assert.Throws<MocapException>(() => runner.SetCharacterHeight(1, 0.4f));
+            StringAssert.Contains("1..2.5 m", e.Message);
+            runner.Close();
+            Assert.Throws<InvalidOperationException>(() => runner.SetCharacterHeight(0, 1.8f));
+
+            var giant = Character("Goliath", _walk);
+            giant.HeightMeters = 3f;
+            Assert.IsTrue(runner.Open(Plan(giant)));
+            RunUntil(runner, MocapRunnerEvent.Failed);
+            StringAssert.Contains("Goliath", runner.LastError);
+            StringAssert.Contains("1..2.5 m", runner.LastError);
         }
 
         [Test]

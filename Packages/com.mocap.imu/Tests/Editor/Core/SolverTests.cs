@@ -35,11 +35,12 @@ namespace Mocap.Imu.Tests
         /// <summary>Every pose of one character: the capture replayed (calibrated) through a new
         /// solver of the model as fast as possible.</summary>
         public static List<MocapPose> SolveOneCharacter(SynthCapture capture, MocapModel model,
-                                                        SolverConfig config = null)
+                                                        SolverConfig config = null, float heightMeters = 0f)
         {
             using var session = OpenCalibratedReplay(capture, model.Info.FrameRate);
             using var solver = MocapSolver.Open(model, config);
             Assert.AreEqual(0, solver.AddCharacter(session));
+            solver.SetCharacterHeight(0, heightMeters);
             solver.Start();
             session.Start();
             return DrainAll(solver)[0];
@@ -457,6 +458,46 @@ namespace Mocap.Imu.Tests
             bad = new SolverConfig { SmoothingMinCutoffHz = -1f };
             e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model, bad));
             StringAssert.Contains("smoothing_min_cutoff_hz", e.Message);
+        }
+
+        [Test]
+        public void APerformerHeightScalesTheRootByTheShippedModelsStrideLaw()
+        {
+            // The shipped model carries its stride law; a tall performer's root moves less for
+            // the model's skeleton (its strides are read as too long for it), the pose is the same.
+            ModelInfo info = _model.Info;
+            Assert.IsTrue(info.HasStrideScaling, "the shipped model has no mocap.training_height / stride_exponent");
+            Assert.That(info.TrainingHeight, Is.InRange(1.6f, 1.8f));
+            Assert.That(info.StrideExponent, Is.InRange(0.05f, 0.95f));
+            const float height = 1.95f;
+            double gain = Math.Pow(height / info.TrainingHeight, info.StrideExponent - 1.0);
+            var config = new SolverConfig { DriftCorrection = false };
+            var own = SolverReplay.SolveOneCharacter(_capture, _model, config);
+            var tall = SolverReplay.SolveOneCharacter(_capture, _model, config, height);
+            Assert.AreEqual(own.Count, tall.Count);
+            double travelledOwn = 0, travelledTall = 0;
+            for (int i = 0; i < own.Count; i++)
+            {
+                Assert.AreEqual(own[i].GetJointRotation(5), tall[i].GetJointRotation(5), $"pose {i}: the pose is the model's");
+                Vec3 v = own[i].RootVelocity, w = tall[i].RootVelocity;
+                Assert.AreEqual(gain * v.X, w.X, 1e-5 + 1e-5 * Math.Abs(v.X), $"pose {i} velocity x");
+                Assert.AreEqual(gain * v.Z, w.Z, 1e-5 + 1e-5 * Math.Abs(v.Z), $"pose {i} velocity z");
+                if (i > 0)
+                {
+                    travelledOwn += (own[i].RootPosition - own[i - 1].RootPosition).Length;
+                    travelledTall += (tall[i].RootPosition - tall[i - 1].RootPosition).Length;
+                }
+            }
+            Assert.Greater(travelledOwn, 0.1, "the capture moves the root");
+            Assert.AreEqual(gain, travelledTall / travelledOwn, 1e-3);
+
+            using var session = SolverReplay.OpenCalibratedReplay(_capture, info.FrameRate);
+            using var solver = MocapSolver.Open(_model);
+            solver.AddCharacter(session);
+            var e = Assert.Throws<MocapException>(() => solver.SetCharacterHeight(0, MocapSolver.MaxHeight + 0.1f));
+            Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
+            StringAssert.Contains("1..2.5 m", e.Message);
+            solver.SetCharacterHeight(0, MocapSolver.MinHeight);
         }
 
         [Test]
