@@ -1,0 +1,208 @@
+"""cv: a training recipe scored by cross-validation over subject folds.
+
+    python3 -m training cv [--folds 4] [--out training/results/cv] [--runs DIR] [--packs DIR]
+        [--eval-max-seconds S] [train options: --size, --budget-minutes, --steps, --seed, ...]
+
+One validation set of a few subjects is a noisy judge: choosing among runs by it fits those
+people (twelve fine-tunes once moved error between the validation subjects without closing the
+gap to unseen ones). Here the people of the train and validation splits are dealt into K folds
+of about equal motion (whole subjects, never split); the recipe given by the train options is
+trained K times, each time on K - 1 folds, and scored on the fold it never saw. The test split
+takes no part. The report gives each fold's joint angle error, position error and 10 s root drift
+(`evaluate`'s definitions, realistic sensor noise, the mirror-averaged network as exported), their
+mean and the spread between folds (standard deviation, lowest and highest): a difference
+between two recipes smaller than that spread is not evidence.
+
+Inside each run the trainer keeps the checkpoint that scores best on an inner validation set
+(every 10th subject of its own training folds, held out of its training), so the fold it is
+judged on plays no part in any choice. Runs go to --runs (default training/data/cv/), one folder
+per fold with its checkpoints and training log; OUT/cv.md and OUT/cv.json hold the result.
+
+Every train option that describes the recipe is taken (size, budget or steps, seed, augmentation,
+sensors, loss weights); the data options are not (--bvh, --val-bvh, --max-clips, --smoke: the
+folds are the data), nor --init-from (weights that have seen a fold's people would score it)
+or --resume.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shlex
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from .cli import POSITIVE_INT, number_type
+from .errors import UsageError
+
+REPO = Path(__file__).resolve().parent.parent
+DEFAULT_OUT = REPO / "training" / "results" / "cv"
+DEFAULT_RUNS = REPO / "training" / "data" / "cv"
+METRICS = (("angle_all", "angle (deg)", 2), ("pos", "position (cm)", 2), ("drift_10s", "drift 10 s (m)", 3))
+REFUSED = (("bvh", "--bvh"), ("val_bvh", "--val-bvh"), ("max_clips", "--max-clips"),
+           ("smoke", "--smoke"), ("init_from", "--init-from"), ("resume", "--resume"),
+           ("ckpt_dir", "--ckpt-dir"), ("results_dir", "--results-dir"))
+
+
+def subject_folds(motions, k: int) -> list:
+    """Subjects dealt into k folds of about equal frames: the largest subject first, each to the
+    fold with the fewest frames so far (ties: the lower fold). Deterministic. Returns k sorted
+    lists of subject numbers."""
+    frames = {}
+    for m in motions:
+        frames[int(m.subject)] = frames.get(int(m.subject), 0) + int(m.num_frames)
+    if len(frames) < k:
+        raise UsageError(f"{len(frames)} subjects cannot fill {k} folds")
+    folds = [[] for _ in range(k)]
+    load = [0] * k
+    for subject in sorted(frames, key=lambda s: (-frames[s], s)):
+        i = min(range(k), key=lambda j: (load[j], j))
+        folds[i].append(subject)
+        load[i] += frames[subject]
+    return [sorted(f) for f in folds]
+
+
+def inner_validation(motions) -> tuple:
+    """(training motions, inner validation motions): every 10th subject of the training folds,
+    in number order (at least one, never all)."""
+    from .train import _spread
+    subjects = sorted({int(m.subject) for m in motions})
+    held = {subjects[i] for i in _spread(len(subjects), 0.1)}
+    return ([m for m in motions if int(m.subject) not in held],
+            [m for m in motions if int(m.subject) in held])
+
+
+def spread(values) -> dict:
+    v = np.asarray(values, np.float64)
+    return {"mean": float(v.mean()), "std": float(v.std(ddof=1)) if len(v) > 1 else 0.0,
+            "min": float(v.min()), "max": float(v.max())}
+
+
+def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progress=print) -> dict:
+    """Trains cfg's recipe once per fold and scores each run on its held-out fold."""
+    from .evaluate import evaluate
+    from .train import train
+    folds = subject_folds(motions, k)
+    rows = []
+    for i, held in enumerate(folds):
+        held_set = set(held)
+        test_motions = [m for m in motions if int(m.subject) in held_set]
+        fit_motions, inner = inner_validation([m for m in motions if int(m.subject) not in held_set])
+        fold_dir = Path(runs_dir) / f"fold{i + 1}"
+        fold_cfg = replace(cfg, ckpt_dir=str(fold_dir / "checkpoints"), results_dir=str(fold_dir / "results"),
+                           train_source=f"cv fold {i + 1} of {k}: the other folds",
+                           val_source=f"cv fold {i + 1} of {k}: inner validation subjects")
+        progress(f"cv: fold {i + 1}/{k}: training on {len(fit_motions)} clips "
+                 f"({len(inner)} inner validation), held out subjects {', '.join(map(str, held))}")
+        t0 = time.monotonic()
+        train(fold_cfg, motions=fit_motions, val_motions=inner)
+        ckpt = fold_dir / "checkpoints" / "best.pt"
+        if not ckpt.is_file():
+            ckpt = fold_dir / "checkpoints" / "last.pt"
+        scored = test_motions
+        if eval_max_seconds:
+            from .evaluate import _trim
+            scored = _trim(test_motions, None, eval_max_seconds)
+        r = evaluate(scored, models=(), checkpoint=str(ckpt), out_dir=fold_dir / "eval", latency=False,
+                     source=f"fold {i + 1} (subjects {', '.join(map(str, held))})", progress=False)
+        s = r["results"]["PyTorch fp32"]
+        rows.append({"fold": i + 1, "subjects": held, "clips": len(test_motions),
+                     "minutes": sum(m.num_frames / m.fps for m in test_motions) / 60.0,
+                     "checkpoint": ckpt.name, **{key: float(s[key]) for key, _, _ in METRICS},
+                     "train_minutes": (time.monotonic() - t0) / 60.0})
+        progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {rows[-1][key]:.{d}f}" for key, label, d in METRICS))
+    return {"folds": rows, "summary": {key: spread([r[key] for r in rows]) for key, _, _ in METRICS}}
+
+
+def write_report(out_dir: Path, result: dict, meta: dict) -> Path:
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    lines = [f"# Cross-validation over subject folds: {meta['recipe']}", "",
+             f"{meta['clips']} clips of {meta['subjects']} subjects (the train and validation splits; the "
+             f"test split takes no part) in {len(result['folds'])} folds of whole subjects. Each row: the "
+             "recipe trained on the other folds (the checkpoint best on an inner validation set of "
+             "every 10th of its own subjects), scored on the fold's people, realistic sensor noise, "
+             "mirror-averaged network. Made by:", "", f"    {meta['command']}", "",
+             "| fold | subjects | clips | minutes | " + " | ".join(label for _, label, _ in METRICS) + " |",
+             "|---|---|---|---|" + "---|" * len(METRICS)]
+    for r in result["folds"]:
+        lines.append(f"| {r['fold']} | {', '.join(map(str, r['subjects']))} | {r['clips']} | {r['minutes']:.0f} | "
+                     + " | ".join(f"{r[key]:.{d}f}" for key, _, d in METRICS) + " |")
+    s = result["summary"]
+    lines.append("| **mean** | | | | " + " | ".join(f"**{s[key]['mean']:.{d}f}**" for key, _, d in METRICS) + " |")
+    lines.append("| spread: std (min - max) | | | | " + " | ".join(
+        f"{s[key]['std']:.{d}f} ({s[key]['min']:.{d}f} - {s[key]['max']:.{d}f})" for key, _, d in METRICS) + " |")
+    lines += ["", f"Training took {sum(r['train_minutes'] for r in result['folds']):.0f} min in all "
+              f"({meta.get('device', 'this machine')}). A recipe beats another only by more than this spread.", ""]
+    path = out_dir / "cv.md"
+    path.write_text("\n".join(lines))
+    (out_dir / "cv.json").write_text(json.dumps({"meta": meta, **result}, indent=1))
+    return path
+
+
+def add_arguments(p):
+    from .train import add_arguments as train_arguments
+    p.add_argument("--folds", type=number_type(int, lambda v: 2 <= v <= 20, "a whole number from 2 to 20"),
+                   default=4, help="folds of whole subjects (default 4)")
+    p.add_argument("--out", default=str(DEFAULT_OUT), help="report folder (default training/results/cv)")
+    p.add_argument("--runs", default=str(DEFAULT_RUNS), help="one training run per fold in here "
+                   "(default training/data/cv)")
+    p.add_argument("--packs", default=None, help="read the people from PACKS/train.mpack and "
+                   "PACKS/val.mpack (training pack) instead of the CMU cache: a GPU machine without the data")
+    p.add_argument("--eval-max-seconds", dest="eval_max_seconds", type=POSITIVE_INT, default=None,
+                   help="score only the first S seconds of each held-out clip (faster)")
+    train_arguments(p)
+    return p
+
+
+def recipe_options(argv) -> list:
+    """The train options of a cv command line (its own options taken out)."""
+    out, skip = [], False
+    for a in argv:
+        if skip:
+            skip = False
+            continue
+        name = a.split("=", 1)[0]
+        if name in ("--folds", "--out", "--runs", "--packs", "--eval-max-seconds"):
+            skip = "=" not in a
+            continue
+        out.append(a)
+    return out
+
+
+def main(args=None) -> int:
+    import sys
+    argv = list(args) if isinstance(args, list) else sys.argv[2:]
+    if args is None or isinstance(args, list):
+        args = add_arguments(argparse.ArgumentParser(prog="python3 -m training cv")).parse_args(argv)
+    given = [option for attr, option in REFUSED if getattr(args, attr, None) not in (None, False)]
+    if given:
+        raise UsageError(f"{' '.join(given)}: cv trains on folds of the train and validation people "
+                         "and writes its runs under --runs; it takes recipe options only")
+    from . import dataset
+    from .train import config_from_args
+    cfg = config_from_args(args)
+    if args.packs:
+        packs = [Path(args.packs) / f"{split}.mpack" for split in ("train", "val")]
+        missing = [str(p) for p in packs if not p.is_file()]
+        if missing:
+            raise UsageError(f"--packs {args.packs}: {', '.join(missing)} missing (python3 -m training "
+                             "pack --split train|val --out ...)")
+        motions = dataset.load_motions(packs[0]) + dataset.load_motions(packs[1])
+    else:
+        motions = dataset.load_motions("train") + dataset.load_motions("val")
+    recipe = " ".join(shlex.quote(a) for a in recipe_options(argv)) or "the default recipe"
+    command = "python3 -m training cv " + " ".join(shlex.quote(a) for a in argv)
+    print(f"cv: {len(motions)} clips, {len({int(m.subject) for m in motions})} subjects, "
+          f"{args.folds} folds; recipe: {recipe}")
+    result = run_folds(motions, cfg, args.folds, Path(args.runs), args.eval_max_seconds)
+    meta = {"recipe": recipe, "command": command, "clips": len(motions),
+            "subjects": len({int(m.subject) for m in motions}), "device": cfg.device or "auto"}
+    path = write_report(Path(args.out), result, meta)
+    s = result["summary"]
+    print("cv: " + "  ".join(f"{label} {s[key]['mean']:.{d}f} +- {s[key]['std']:.{d}f}"
+                             for key, label, d in METRICS) + f"; report {path}")
+    return 0 if all(math.isfinite(s[key]["mean"]) for key, _, _ in METRICS) else 1
