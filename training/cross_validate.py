@@ -125,7 +125,9 @@ def write_report(out_dir: Path, result: dict, meta: dict) -> Path:
              f"test split takes no part) in {len(result['folds'])} folds of whole subjects. Each row: the "
              "recipe trained on the other folds (the checkpoint best on an inner validation set of "
              "every 10th of its own subjects), scored on the fold's people, realistic sensor noise, "
-             "mirror-averaged network. Made by:", "", f"    {meta['command']}", "",
+             "mirror-averaged network"
+             + (f", the first {meta['eval_max_seconds']} s of each clip" if meta.get("eval_max_seconds") else "")
+             + ". Made by:", "", f"    {meta['command']}", "",
              "| fold | subjects | clips | minutes | " + " | ".join(label for _, label, _ in METRICS) + " |",
              "|---|---|---|---|" + "---|" * len(METRICS)]
     for r in result["folds"]:
@@ -200,6 +202,7 @@ def main(args=None) -> int:
           f"{args.folds} folds; recipe: {recipe}")
     result = run_folds(motions, cfg, args.folds, Path(args.runs), args.eval_max_seconds)
     meta = {"recipe": recipe, "command": command, "clips": len(motions),
+            "eval_max_seconds": args.eval_max_seconds,
             "subjects": len({int(m.subject) for m in motions}), "device": cfg.device or "auto"}
     path = write_report(Path(args.out), result, meta)
     s = result["summary"]
