@@ -1,7 +1,7 @@
 """cv: a training recipe scored by cross-validation over subject folds.
 
-    python3 -m training cv [--folds 4] [--out training/results/cv] [--runs DIR] [--packs DIR]
-        [--eval-max-seconds S] [train options: --size, --budget-minutes, --steps, --seed, ...]
+    python3 -m training cv --steps N [--folds 4] [--out training/results/cv] [--runs DIR]
+        [--packs DIR] [--eval-max-seconds S] [train options: --size, --seed, --lr, augmentation ...]
 
 One validation set of a few subjects is a noisy judge: choosing among runs by it fits those
 people (twelve fine-tunes once moved error between the validation subjects without closing the
@@ -18,8 +18,9 @@ Inside each run the trainer keeps the checkpoint that scores best on an inner va
 judged on plays no part in any choice. Runs go to --runs (default training/data/cv/), one folder
 per fold with its checkpoints and training log; OUT/cv.md and OUT/cv.json hold the result.
 
-Every train option that describes the recipe is taken (size, budget or steps, seed, augmentation,
-sensors, loss weights); the data options are not (--bvh, --val-bvh, --max-clips, --smoke: the
+Every train option that describes the recipe is taken (size, steps, seed, augmentation, sensors,
+loss weights); every fold trains the same --steps, never to a wall-clock budget (a fold trained
+while the machine is busy would get fewer steps). The data options are not taken (--bvh, --val-bvh, --max-clips, --smoke: the
 folds are the data), nor --init-from (weights that have seen a fold's people would score it)
 or --resume.
 """
@@ -45,6 +46,10 @@ METRICS = (("angle_all", "angle (deg)", 2), ("pos", "position (cm)", 2), ("drift
 REFUSED = (("bvh", "--bvh"), ("val_bvh", "--val-bvh"), ("max_clips", "--max-clips"),
            ("smoke", "--smoke"), ("init_from", "--init-from"), ("resume", "--resume"),
            ("ckpt_dir", "--ckpt-dir"), ("results_dir", "--results-dir"))
+# Every fold gets the same training: a wall-clock budget gives a fold trained while the machine
+# is busy fewer steps (a first run here trained one fold 562 steps and the others ~1,450), and
+# its score then says more about the load than about its people.
+NO_CLOCK_BUDGET = 1e9
 
 
 def subject_folds(motions, k: int) -> list:
@@ -98,7 +103,7 @@ def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progr
         progress(f"cv: fold {i + 1}/{k}: training on {len(fit_motions)} clips "
                  f"({len(inner)} inner validation), held out subjects {', '.join(map(str, held))}")
         t0 = time.monotonic()
-        train(fold_cfg, motions=fit_motions, val_motions=inner)
+        trained = train(fold_cfg, motions=fit_motions, val_motions=inner)
         ckpt = fold_dir / "checkpoints" / "best.pt"
         if not ckpt.is_file():
             ckpt = fold_dir / "checkpoints" / "last.pt"
@@ -111,7 +116,8 @@ def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progr
         s = r["results"]["PyTorch fp32"]
         rows.append({"fold": i + 1, "subjects": held, "clips": len(test_motions),
                      "minutes": sum(m.num_frames / m.fps for m in test_motions) / 60.0,
-                     "checkpoint": ckpt.name, **{key: float(s[key]) for key, _, _ in METRICS},
+                     "checkpoint": ckpt.name, "steps": int(trained.get("steps", 0)),
+                     **{key: float(s[key]) for key, _, _ in METRICS},
                      "train_minutes": (time.monotonic() - t0) / 60.0})
         progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {rows[-1][key]:.{d}f}" for key, label, d in METRICS))
     return {"folds": rows, "summary": {key: spread([r[key] for r in rows]) for key, _, _ in METRICS}}
@@ -128,14 +134,14 @@ def write_report(out_dir: Path, result: dict, meta: dict) -> Path:
              "mirror-averaged network"
              + (f", the first {meta['eval_max_seconds']} s of each clip" if meta.get("eval_max_seconds") else "")
              + ". Made by:", "", f"    {meta['command']}", "",
-             "| fold | subjects | clips | minutes | " + " | ".join(label for _, label, _ in METRICS) + " |",
-             "|---|---|---|---|" + "---|" * len(METRICS)]
+             "| fold | subjects | clips | minutes | steps trained | " + " | ".join(label for _, label, _ in METRICS) + " |",
+             "|---|---|---|---|---|" + "---|" * len(METRICS)]
     for r in result["folds"]:
         lines.append(f"| {r['fold']} | {', '.join(map(str, r['subjects']))} | {r['clips']} | {r['minutes']:.0f} | "
-                     + " | ".join(f"{r[key]:.{d}f}" for key, _, d in METRICS) + " |")
+                     f"{r.get('steps', '-')} | " + " | ".join(f"{r[key]:.{d}f}" for key, _, d in METRICS) + " |")
     s = result["summary"]
-    lines.append("| **mean** | | | | " + " | ".join(f"**{s[key]['mean']:.{d}f}**" for key, _, d in METRICS) + " |")
-    lines.append("| spread: std (min - max) | | | | " + " | ".join(
+    lines.append("| **mean** | | | | | " + " | ".join(f"**{s[key]['mean']:.{d}f}**" for key, _, d in METRICS) + " |")
+    lines.append("| spread: std (min - max) | | | | | " + " | ".join(
         f"{s[key]['std']:.{d}f} ({s[key]['min']:.{d}f} - {s[key]['max']:.{d}f})" for key, _, d in METRICS) + " |")
     lines += ["", f"Training took {sum(r['train_minutes'] for r in result['folds']):.0f} min in all "
               f"({meta.get('device', 'this machine')}). A recipe beats another only by more than this spread.", ""]
@@ -184,9 +190,13 @@ def main(args=None) -> int:
     if given:
         raise UsageError(f"{' '.join(given)}: cv trains on folds of the train and validation people "
                          "and writes its runs under --runs; it takes recipe options only")
+    if getattr(args, "budget_minutes", None) is not None or getattr(args, "steps", None) is None:
+        raise UsageError("cv needs --steps N (the same training for every fold) and no --budget-minutes: "
+                         "a wall-clock budget trains a fold run on a busy machine for fewer steps")
     from . import dataset
     from .train import config_from_args
     cfg = config_from_args(args)
+    cfg.budget_minutes = NO_CLOCK_BUDGET
     if args.packs:
         packs = [Path(args.packs) / f"{split}.mpack" for split in ("train", "val")]
         missing = [str(p) for p in packs if not p.is_file()]

@@ -50,9 +50,12 @@ def test_recipe_options_leave_out_cvs_own():
                               "--budget-minutes", "5"]) == ["--size", "tiny", "--budget-minutes", "5"]
 
 
-def test_data_options_are_refused(capsys):
+def test_data_options_and_clock_budgets_are_refused(capsys):
     for extra in (["--bvh", "x"], ["--init-from", "x.pt"], ["--smoke"], ["--resume"]):
         with pytest.raises(UsageError, match="recipe options only"):
+            cv.main(["--folds", "2", "--steps", "10", *extra])
+    for extra in ([], ["--budget-minutes", "5"], ["--steps", "10", "--budget-minutes", "5"]):
+        with pytest.raises(UsageError, match="needs --steps N"):
             cv.main(["--folds", "2", *extra])
 
 
@@ -71,7 +74,7 @@ def test_a_short_cross_validation_trains_and_scores_every_fold(tmp_path):
     assert sorted(s for r in result["folds"] for s in r["subjects"]) == list(range(1, 7))
     for r in result["folds"]:
         assert np.isfinite([r["angle_all"], r["pos"], r["drift_10s"]]).all(), r
-        assert r["clips"] == 4
+        assert r["clips"] == 4 and r["steps"] == 3
         assert (tmp_path / "runs" / f"fold{r['fold']}" / "checkpoints" / r["checkpoint"]).is_file()
         log = json.loads((tmp_path / "runs" / f"fold{r['fold']}" / "results" / "train_log.json").read_text())
         assert f"cv fold {r['fold']} of 3" in json.dumps(log)
@@ -87,4 +90,4 @@ def test_a_short_cross_validation_trains_and_scores_every_fold(tmp_path):
 def test_missing_packs_are_named(tmp_path):
     (tmp_path / "train.mpack").write_bytes(b"")
     with pytest.raises(UsageError, match="val.mpack missing"):
-        cv.main(["--packs", str(tmp_path), "--size", "tiny"])
+        cv.main(["--packs", str(tmp_path), "--size", "tiny", "--steps", "10"])
