@@ -386,7 +386,6 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
 
 
 SMOOTHING = number_type(str, lambda v: _smoothing_ok(v), "HZ or HZ,BETA with HZ >= 0 and BETA >= 0")
-BODY_SCALE = number_type(float, lambda v: 0.5 <= v <= 2.0, "a number from 0.5 to 2")
 HEIGHT = number_type(float, lambda v: 1.0 <= v <= 2.5, "a height from 1 to 2.5 m")
 
 
@@ -400,6 +399,7 @@ def _smoothing_ok(v: str) -> bool:
 
 def add_arguments(p=None):
     from .dropout_eval import DEFAULT_MODEL, add_source_arguments
+    from .evaluate import BODY_SCALE
     p = p or argparse.ArgumentParser(prog="python3 -m training engine-eval",
                                      description=__doc__.split("\n")[0])
     add_source_arguments(p, ["train", "val", "test"], 40, CLIP_S, MIN_CLIP_S)

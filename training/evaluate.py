@@ -812,7 +812,7 @@ def _trim(motions, max_clips, max_seconds):
     return motions
 
 
-_BODY_SCALE = number_type(float, lambda v: BODY_SCALE_RANGE[0] <= v <= BODY_SCALE_RANGE[1],
+BODY_SCALE = number_type(float, lambda v: BODY_SCALE_RANGE[0] <= v <= BODY_SCALE_RANGE[1],
                           f"a number from {BODY_SCALE_RANGE[0]:g} to {BODY_SCALE_RANGE[1]:g}")
 _POSITIVE_SECONDS = number_type(float, lambda v: v > 0, "a positive finite number of seconds")
 
@@ -844,7 +844,7 @@ def add_arguments(p):
     p.add_argument("--absent", default=None,
                    help="sensors missing for the whole of every clip, comma-separated (e.g. chest): "
                         "masked (model contract 2) models only")
-    p.add_argument("--body-scale", dest="body_scale", type=_BODY_SCALE, default=1.0,
+    p.add_argument("--body-scale", dest="body_scale", type=BODY_SCALE, default=1.0,
                    help="scale every clip's skeleton and root path (a shorter or taller performer doing "
                         f"the same motion), {BODY_SCALE_RANGE[0]:g} to {BODY_SCALE_RANGE[1]:g}; default 1")
     p.add_argument("--no-latency", action="store_true")

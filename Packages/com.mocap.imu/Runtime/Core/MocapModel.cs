@@ -227,8 +227,7 @@ namespace Mocap.Imu
                 NativeMethods.Check(NativeSolverMethods.mocap_model_get_info(handle, &info));
                 float height = 0f, exponent = 0f;
                 MocapStatus scaling = NativeSolverMethods.mocap_model_get_stride_scaling(handle, &height, &exponent);
-                if (scaling == MocapStatus.Unsupported) height = exponent = 0f;
-                else NativeMethods.Check(scaling);
+                if (scaling != MocapStatus.Unsupported) NativeMethods.Check(scaling); // unsupported: both stay 0
                 return new MocapModel(path, handle, new ModelInfo(in info, height, exponent));
             }
             catch
