@@ -245,8 +245,10 @@ def test_batched_anchoring_equals_the_bone_by_bone_definition(sensors, wrist, ma
     rg = torch.from_numpy(sk.rot6d_to_matrix(torch.randn(b, t, n, 6, generator=g).double().numpy())).float()
     cols = 0.3 * torch.randn(b, t, 24, 3, 2, generator=g)
     mask = (torch.rand(b, t, n, generator=g) > 0.4).float() if masked else None
-    anchored, joints = net._anchor_sensor_bones(rot, cols, rg, mask)
+    columns, joints = net._anchor_sensor_bones(rot, cols, rg, mask)
     assert sorted(joints) == sorted(j for j in net.anchor_joints if j != 0)
+    assert columns.shape == (b, t, len(joints), 3, 2)     # orthonormalised once, with every joint
+    anchored = gram_schmidt(columns)
     want = _anchored_bone_by_bone(net, rot, cols, rg, mask)
     assert torch.allclose(anchored, want[:, :, joints], atol=1e-5)
     assert (anchored - rot[:, :, joints]).abs().max() > 0.1     # it did re-predict them
@@ -329,6 +331,31 @@ def test_mirror_ensemble_is_exactly_mirror_equivariant_where_the_single_network_
     assert torch.allclose(r.transpose(-1, -2) @ r, eye, atol=1e-5)
     assert torch.allclose(torch.linalg.det(r), torch.ones(r.shape[:-2]), atol=1e-5)
     assert (r - single).abs().max() > 1e-3
+
+
+def test_the_pair_averages_each_branchs_unit_columns_before_one_gram_schmidt():
+    """The ensemble's rule, from its parts: each branch's answer is the Gram-Schmidt of its
+    columns (forward_raw = gram_schmidt(forward_columns)); the pair sums both branches' columns
+    scaled to unit length, the mirrored one reflected back with its joints swapped, and
+    orthonormalises once. A rule on the branches' rotations instead (or no scaling) differs."""
+    net = _trained_like()
+    net.enable_anchoring()
+    with torch.no_grad():
+        net.head[-1].weight.normal_(0, 0.3)
+    ens = MirrorEnsemble(net).eval()
+    o, a = _inputs(seconds=0.5)
+    m, om, am = _mirrored(o, a)
+    with torch.no_grad():
+        r = ens(o, a)[0]
+        cols, cols_m = net.forward_columns(o, a)[0], net.forward_columns(om, am)[0]
+        assert torch.allclose(net(o, a)[0], gram_schmidt(cols), atol=1e-6)
+    unit = cols / cols.norm(dim=-2, keepdim=True)
+    back = m @ (cols_m / cols_m.norm(dim=-2, keepdim=True))[:, :, sk.MIRROR_JOINTS] @ m[:2, :2]
+    assert torch.allclose(r, gram_schmidt(unit + back), atol=1e-5)
+    rotations = gram_schmidt(cols) + (m @ gram_schmidt(cols_m) @ m)[:, :, sk.MIRROR_JOINTS]
+    assert (r - gram_schmidt(rotations[..., :2])).abs().max() > 1e-4
+    unscaled = cols + m @ cols_m[:, :, sk.MIRROR_JOINTS] @ m[:2, :2]
+    assert (r - gram_schmidt(unscaled)).abs().max() > 1e-4
 
 
 def test_mirror_ensemble_streams_with_a_doubled_state_and_keeps_the_weights():
