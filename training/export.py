@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from . import sensors as se
+from . import onnx_metadata, sensors as se
 from . import skeleton as sk
 from .errors import CommandError, UsageError
 from .model import (ExportWrapper, MaskedExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters,
@@ -88,13 +88,6 @@ def contract_metadata(net: PoseNet, precision: str, model_name: str) -> dict:
     }
 
 
-def _set_metadata(model, meta: dict) -> None:
-    del model.metadata_props[:]
-    for k, v in meta.items():
-        p = model.metadata_props.add()
-        p.key, p.value = k, v
-
-
 def export_fp32(net: PoseNet, path, model_name: str) -> None:
     import onnx
     net = net.cpu().eval()
@@ -122,7 +115,7 @@ def export_fp32(net: PoseNet, path, model_name: str) -> None:
                           do_constant_folding=True)
     model = onnx.load(str(path))
     _fix_state_shapes(model, net)
-    _set_metadata(model, contract_metadata(net, "fp32", model_name))
+    onnx_metadata.replace(model, contract_metadata(net, "fp32", model_name))
     model.doc_string = "com.mocap.imu pose model, contract version " + contract_version(net)
     onnx.checker.check_model(model)
     onnx.save(model, str(path))
@@ -171,9 +164,9 @@ def convert_fp16(src, dst) -> dict:
     del g.node[:]
     g.node.extend(casts + nodes)
     # drop stale value_info of the casted names (they keep float type anyway)
-    meta = {p.key: p.value for p in model.metadata_props}
+    meta = onnx_metadata.read(model)
     meta["mocap.precision"] = "fp16"
-    _set_metadata(model, meta)
+    onnx_metadata.replace(model, meta)
     onnx.checker.check_model(model)
     onnx.save(model, str(dst))
     return {"fp16_values": int(converted)}

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import onnx_metadata
 from .cli import NON_NEGATIVE_INT, POSITIVE_INT
 from .errors import CommandError, UsageError
 
@@ -80,10 +81,6 @@ def dequantize(q: np.ndarray, scale: np.ndarray, axis: int) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------ graph rewrite
-def _metadata(model) -> dict:
-    return {p.key: p.value for p in model.metadata_props}
-
-
 def _consumers(graph) -> dict:
     uses: dict = {}
     for node in graph.node:
@@ -123,7 +120,7 @@ def quantize_model(model, ops=QUANTIZED_OPS) -> tuple:
     import onnx
     from onnx import helper, numpy_helper
 
-    meta = _metadata(model)
+    meta = onnx_metadata.read(model)
     precision = meta.get("mocap.precision")
     if precision != "fp32":
         raise UsageError(f"the model's mocap.precision is {precision!r}: quantise the fp32 model "
@@ -184,10 +181,7 @@ def quantize_model(model, ops=QUANTIZED_OPS) -> tuple:
         model.opset_import.append(helper.make_opsetid(CONTRIB_DOMAIN, 1))
     meta["mocap.precision"] = "int8"
     meta["mocap.model_name"] = _int8_name(meta.get("mocap.model_name", ""), summary)
-    del model.metadata_props[:]
-    for k, v in meta.items():
-        p = model.metadata_props.add()
-        p.key, p.value = k, v
+    onnx_metadata.replace(model, meta)
     onnx.checker.check_model(model)
     summary["float_values_left"] = int(sum(np.prod(i.dims) for i in g.initializer
                                            if i.data_type == onnx.TensorProto.FLOAT))

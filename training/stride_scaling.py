@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import skeleton as sk
+from . import onnx_metadata, skeleton as sk
 from .cli import POSITIVE_INT
 from .errors import CommandError, UsageError
 
@@ -83,7 +83,7 @@ def fit(per_scale: dict) -> dict:
 def wrist_sensor_bone(model) -> str:
     """Where the model expects the wrist sensors (mocap.wrist_sensor_bone; absent: the hand)."""
     import onnx
-    meta = {p.key: p.value for p in onnx.load(str(model), load_external_data=False).metadata_props}
+    meta = onnx_metadata.read(onnx.load(str(model), load_external_data=False))
     return meta.get("mocap.wrist_sensor_bone") or "hand"
 
 
@@ -106,16 +106,9 @@ def write_metadata(path, height: float, exponent: float) -> None:
     """Sets the two keys in an ONNX file, leaving the graph and every other key as they were."""
     import onnx
     model = onnx.load(str(path))
-    keys = {p.key for p in model.metadata_props}
-    if "mocap.contract_version" not in keys:
+    if "mocap.contract_version" not in onnx_metadata.read(model):
         raise CommandError(f"{path}: not a mocap pose model (no mocap.contract_version)")
-    values = {HEIGHT_KEY: f"{height:.3f}", EXPONENT_KEY: f"{exponent:.2f}"}
-    for p in model.metadata_props:
-        if p.key in values:
-            p.value = values.pop(p.key)
-    for k, v in values.items():
-        p = model.metadata_props.add()
-        p.key, p.value = k, v
+    onnx_metadata.update(model, {HEIGHT_KEY: f"{height:.3f}", EXPONENT_KEY: f"{exponent:.2f}"})
     tmp = Path(str(path) + ".tmp")
     onnx.save(model, str(tmp))
     tmp.replace(path)

@@ -17,6 +17,7 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1]
 FOUNDATION = {
     "training.errors": set(),
     "training.files": {"training.errors"},
+    "training.onnx_metadata": set(),
     "training.progress": set(),
 }
 
