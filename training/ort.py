@@ -182,7 +182,9 @@ def run_onnx(model_path, imu_orientation, imu_acceleration, state=None, *, frame
     refuses one for a model without the mask input). The whole clip runs in one call unless frames_per_call (or stream=True: 1 frame per
     call, as the engine runs). Returns a dict of float32 arrays: joint_rotations (B,T,24,3,3),
     root_velocity (B,T,3), foot_contact (B,T,2), state_out_h, state_out_c (L,B,H); with
-    timing=True also "timing": {calls, first_us, p50_us, p99_us, mean_us} per call."""
+    timing=True also "timing": {calls, first_us, p50_us, p99_us, mean_us} per call. threads: ONNX
+    Runtime's intra-op threads; None: every core for a whole clip in one call (large products
+    that split well: 16 clips ran 1.5x faster on 2 threads), else the engine's default (one)."""
     ori = np.asarray(imu_orientation, dtype=np.float32)
     acc = np.asarray(imu_acceleration, dtype=np.float32)
     if ori.ndim != 5 or ori.shape[3:] != (3, 3) or not 1 <= ori.shape[2] <= MAX_SENSORS:
@@ -213,6 +215,8 @@ def run_onnx(model_path, imu_orientation, imu_acceleration, state=None, *, frame
             cmd.append("--stream")
         elif frames_per_call:
             cmd += ["--frames", str(int(frames_per_call))]
+        if threads is None and not stream and not frames_per_call:
+            threads = os.cpu_count() or 1
         if threads:
             cmd += ["--threads", str(int(threads))]
         env = dict(os.environ)

@@ -176,8 +176,8 @@ namespace Mocap.Imu
         [Tooltip("Where the model runs: CPU (always available) or CUDA (needs a CUDA build of ONNX Runtime and a GPU; refused with a clear error otherwise).")]
         public ExecutionProvider executionProvider = ExecutionProvider.Cpu;
 
-        [Tooltip("Threads ONNX Runtime uses inside one operator; 0 = its default.")]
-        [Min(0)] public int intraOpThreads;
+        [Tooltip("Threads ONNX Runtime uses inside one operator. 1 runs the model on the solver's thread; more rarely help (a frame is ~0.1 ms of small operators); 0 = ONNX Runtime's own default, a thread per core whose idle threads spin and keep a core busy.")]
+        [Min(0)] public int intraOpThreads = 1;
 
         [Tooltip("CUDA device index.")]
         [Min(0)] public int cudaDevice;

@@ -447,7 +447,8 @@ typedef enum mocap_execution_provider {
 typedef struct mocap_model_options {
     uint32_t struct_size;
     int32_t execution_provider;   /* mocap_execution_provider */
-    int32_t intra_op_threads;     /* 0: ONNX Runtime's default */
+    int32_t intra_op_threads;     /* 1 (default); 0: ONNX Runtime's default, a thread per core
+                                     whose idle threads spin */
     int32_t optimization_level;   /* 0 none, 1 basic, 2 extended, 3 all (default) */
     int32_t cuda_device;
     char onnxruntime_path[MOCAP_PATH_MAX]; /* "" = search (env MOCAP_ONNXRUNTIME_PATH, ...) */

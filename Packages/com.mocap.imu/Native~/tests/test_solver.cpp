@@ -324,6 +324,44 @@ TEST_F(SolverOnShippedModel, ModelInfoFollowsTheContract)
     EXPECT_NE(std::string(mocap_last_error()).find("struct_size"), std::string::npos);
 }
 
+#if defined(__linux__)
+// Threads of this process, from /proc/self/task.
+size_t process_threads()
+{
+    size_t n = 0;
+    for (const auto &entry : fs::directory_iterator("/proc/self/task")) {
+        (void)entry;
+        ++n;
+    }
+    return n;
+}
+
+// The default options run ONNX Runtime on the calling thread: its own default (a pool thread
+// per core) kept an idle thread spinning, a whole core busy for the life of a live session, for
+// no faster frames. Asking for two threads does start a pool, so the count can tell.
+TEST(Solver, DefaultModelOptionsStartNoOnnxRuntimeThreadPool)
+{
+    REQUIRE_ORT();
+    mocap_model_options o;
+    ASSERT_EQ(mocap_model_options_defaults(&o), MOCAP_OK);
+    EXPECT_EQ(o.intra_op_threads, 1);
+    {
+        Model warm;   // the runtime's own one-off threads (environment, logging) start here
+        ASSERT_EQ(mocap_model_open(kShippedModel.c_str(), &o, &warm.m), MOCAP_OK) << mocap_last_error();
+    }
+    const size_t before = process_threads();
+    {
+        Model m;
+        ASSERT_EQ(mocap_model_open(kShippedModel.c_str(), &o, &m.m), MOCAP_OK) << mocap_last_error();
+        EXPECT_EQ(process_threads(), before);
+    }
+    o.intra_op_threads = 2;
+    Model two;
+    ASSERT_EQ(mocap_model_open(kShippedModel.c_str(), &o, &two.m), MOCAP_OK) << mocap_last_error();
+    EXPECT_GT(process_threads(), before);
+}
+#endif
+
 // Wrong models are refused naming what differs; afterwards a correct model still opens and
 // solves a capture end to end in the same process.
 TEST(Solver, WrongModelIsRefusedByNameAndTheProcessStaysUsable)

@@ -26,15 +26,17 @@ namespace Mocap.Imu
 
     /// <summary>
     /// How to load a pose model (mocap_model_options). A new instance holds the engine's defaults:
-    /// CPU, ONNX Runtime's default thread count, every optimisation, the ONNX Runtime library found
-    /// by the engine ($MOCAP_ONNXRUNTIME_PATH, then the path compiled in).
+    /// CPU, one ONNX Runtime thread, every optimisation, the ONNX Runtime library found by the
+    /// engine ($MOCAP_ONNXRUNTIME_PATH, then the path compiled in).
     /// </summary>
     public sealed class ModelOptions
     {
         /// <summary>CPU or CUDA.</summary>
         public ExecutionProvider ExecutionProvider { get; set; } = ExecutionProvider.Cpu;
-        /// <summary>Threads ONNX Runtime uses inside one operator; 0 = its default.</summary>
-        public int IntraOpThreads { get; set; }
+        /// <summary>Threads ONNX Runtime uses inside one operator: 1 (the default) runs the model
+        /// on the solver's thread; 0 = ONNX Runtime's own default, a thread per core whose idle
+        /// threads spin (a whole core busy while a session runs, for no faster frame).</summary>
+        public int IntraOpThreads { get; set; } = 1;
         /// <summary>Graph optimisation level.</summary>
         public GraphOptimizationLevel OptimizationLevel { get; set; } = GraphOptimizationLevel.All;
         /// <summary>CUDA only: the device index.</summary>

@@ -185,6 +185,16 @@ static int bench_fail(mocap_status st, const char *what)
     return 1;
 }
 
+#if defined(BENCH_HAVE_PTY)
+/* CPU time this process has used, every thread together. */
+static double process_cpu_seconds(void)
+{
+    struct timespec t;
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) != 0) return 0;
+    return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
+}
+#endif
+
 /* Peak and current resident set (MB), from /proc/self/status; -1 elsewhere. */
 static void rss_mb(double *hwm, double *rss)
 {
@@ -480,7 +490,9 @@ static int bench_latency(bench_ctx *b)
     mocap_thread *thread = NULL;
     if (st == MOCAP_OK && mocap_thread_start(&thread, pty_writer_main, &w, "bench-pty") != 0)
         st = mocap_fail(MOCAP_ERR_STATE, "bench: cannot start the writer thread");
-    const int64_t end = mocap_monotonic_ns() + (int64_t)((seconds + 1.0) * 1e9);
+    const int64_t live_start = mocap_monotonic_ns();
+    const int64_t end = live_start + (int64_t)((seconds + 1.0) * 1e9);
+    const double cpu_start = process_cpu_seconds();
     while (st == MOCAP_OK && mocap_monotonic_ns() < end) {
         uint32_t n = 0;
         mocap_solver_drain(solver, id, poses, POSES_CAP, &n);
@@ -496,6 +508,8 @@ static int bench_latency(bench_ctx *b)
         }
         if (!n) mocap_sleep_ms(1);
     }
+    const double cpu_share = (process_cpu_seconds() - cpu_start) /
+                             ((double)(mocap_monotonic_ns() - live_start) * 1e-9);
     w.stop = 1;
     if (thread) mocap_thread_join(thread);
     if (solver) mocap_solver_close(solver);
@@ -515,6 +529,11 @@ static int bench_latency(bench_ctx *b)
                "(%zu poses after a 1 s warm-up, live serial session on a pty fed at 100 Hz)  "
                "[goal p99 < 5]\n",
                p50, p99, mx, n_lat);
+        mocap_model_options mo;   /* the bench opens its model with the defaults */
+        mocap_model_options_defaults(&mo);
+        printf("cpu: the process used %.0f %% of one core while live (engine threads, the pty "
+               "writer and this polling loop; ONNX Runtime intra-op threads %d, the default)\n",
+               100.0 * cpu_share, mo.intra_op_threads);
     }
     free(lat);
     free(poses);

@@ -366,6 +366,18 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public unsafe void NewModelOptionsHoldTheEnginesDefaults()
+        {
+            NativeModelOptions engine;
+            NativeMethods.Check(NativeSolverMethods.mocap_model_options_defaults(&engine));
+            var options = new ModelOptions();
+            Assert.AreEqual(1, engine.IntraOpThreads, "one ONNX Runtime thread: no spinning pool");
+            Assert.AreEqual(engine.IntraOpThreads, options.IntraOpThreads);
+            Assert.AreEqual(engine.OptimizationLevel, (int)options.OptimizationLevel);
+            Assert.AreEqual(engine.ExecutionProvider, (int)options.ExecutionProvider);
+        }
+
+        [Test]
         public void ModelOptionsReachTheEngine()
         {
             // (ONNX Runtime is loaded once per process, so a different library path cannot be
