@@ -312,6 +312,32 @@ def drift_errors(pred_vel, true_root, fps, window_s, step_s=1.0):
     return np.linalg.norm(d_pred - d_true, axis=-1)
 
 
+def travel_ratios(pred_vel, true_root, fps, window_s=10.0, min_travel=0.5, step_s=1.0):
+    """Per window in which the root truly travels more than `min_travel` m horizontally: the
+    predicted horizontal distance (integrated velocity) over the true one. Below 1 the model
+    reads the motion as slower than it was; the along-track share of drift."""
+    T = len(true_root)
+    w = int(round(window_s * fps))
+    if T <= w:
+        return np.zeros(0)
+    pred_pos = np.concatenate([np.zeros((1, 3)), np.cumsum(pred_vel[1:], axis=0) / fps])
+    starts = np.arange(0, T - w, max(1, int(round(step_s * fps))))
+    true_d = np.linalg.norm((true_root[starts + w] - true_root[starts])[:, [0, 2]], axis=-1)
+    pred_d = np.linalg.norm((pred_pos[starts + w] - pred_pos[starts])[:, [0, 2]], axis=-1)
+    moving = true_d > min_travel
+    return pred_d[moving] / true_d[moving]
+
+
+ELBOWS = [sk.JOINT_NAMES.index("left_elbow"), sk.JOINT_NAMES.index("right_elbow")]
+
+
+def elbow_angles(local_rot):
+    """The rotation angle of both elbows' local rotations, every frame (deg): how far each forearm
+    is turned from the straight rest pose (bend and twist together)."""
+    r = local_rot[:, ELBOWS]
+    return np.degrees(np.arccos(np.clip((np.trace(r, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0))).ravel()
+
+
 def jitter(positions, fps):
     """Mean |d^3 p / dt^3| over joints and frames, m/s^3."""
     if len(positions) < 4:
@@ -345,6 +371,8 @@ class Accumulator:
     jitter_frames: int = 0
     over_time: list = field(default_factory=list)     # per clip: (T,) mean angle error
     per_clip: list = field(default_factory=list)      # per clip: ClipScore
+    travel: list = field(default_factory=list)        # per clip: travel_ratios
+    elbows: list = field(default_factory=list)        # per clip: predicted elbow_angles
 
     def add(self, clip: Clip, pred: Prediction):
         true_l = clip.local_rot
@@ -367,6 +395,8 @@ class Accumulator:
             self.jitter_sum += jitter(p_p, clip.fps) * (T - 3)
             self.jitter_frames += T - 3
         self.over_time.append(ang.mean(axis=1))
+        self.travel.append(travel_ratios(pred.root_velocity, clip.root_pos, clip.fps))
+        self.elbows.append(elbow_angles(pred.local_rot))
         self.per_clip.append(ClipScore(clip.name, clip.subject, T, T / clip.fps,
                                        float(ang.mean()), float(dist_cm.mean())))
 
@@ -384,7 +414,19 @@ class Accumulator:
         out["drift_curve"] = {w: (float(np.mean(v)) if len(v) else float("nan"))
                               for w, v in sorted(self.drift_curve.items())}
         out["per_clip"] = list(self.per_clip)
+        travel = np.concatenate(self.travel) if self.travel else np.zeros(0)
+        out["travel_ratio"] = float(np.median(travel)) if len(travel) else float("nan")
+        out["travel_windows"] = len(travel)
+        elbows = np.concatenate(self.elbows) if self.elbows else np.zeros(0)
+        out["elbow_p5"], out["elbow_p95"] = (tuple(float(v) for v in np.percentile(elbows, [5, 95]))
+                                             if len(elbows) else (float("nan"), float("nan")))
         return out
+
+
+def truth_elbows(clips) -> tuple:
+    """The motion capture's own elbow angles: 5th and 95th percentile (deg)."""
+    a = np.concatenate([elbow_angles(c.local_rot) for c in clips]) if clips else np.zeros(0)
+    return tuple(float(v) for v in np.percentile(a, [5, 95])) if len(a) else (float("nan"), float("nan"))
 
 
 def truth_jitter(clips) -> float:
@@ -575,8 +617,9 @@ def write_report(out_dir, results, meta, latency, params, truth_jit):
     lines += ["", f"Drift windows: {results[next(iter(results))].get('drift_2s_n', 0)} / "
               f"{results[next(iter(results))].get('drift_5s_n', 0)} / "
               f"{results[next(iter(results))].get('drift_10s_n', 0)} windows of 2 / 5 / 10 s "
-              "(clips shorter than a window contribute none).", "",
-              "## Targets (issue 3)", ""]
+              "(clips shorter than a window contribute none).", ""]
+    lines += _speed_and_reach(results, meta.get("truth_elbows"))
+    lines += ["## Targets (issue 3)", ""]
     if meta.get("noise_kind", "realistic") != "realistic":
         lines += ["The targets are set for realistic sensor noise; these inputs have none, so the "
                   "figures below show what the model reaches with perfect sensors, not whether it "
@@ -626,6 +669,24 @@ def write_report(out_dir, results, meta, latency, params, truth_jit):
               "`per_clip_error.png`; every clip's errors: `clips.csv`."]
     (out_dir / "evaluation.md").write_text("\n".join(lines) + "\n")
     return out_dir / "evaluation.md"
+
+
+def _speed_and_reach(results, truth_elbows) -> list:
+    """Two ways a model hedges towards the middle: reading motion as slower than it was (the
+    along-track part of drift) and keeping the elbows from straightening or bending fully."""
+    first = results[next(iter(results))]
+    lines = ["## Speed and reach", "",
+             "| method | distance travelled, predicted / true (median) | elbow angle p5 / p95 (deg) |",
+             "|---|---|---|"]
+    for name, s in results.items():
+        lines.append(f"| {name} | {_fmt(s.get('travel_ratio'), 3)} | {_fmt(s.get('elbow_p5'), 1)} / "
+                     f"{_fmt(s.get('elbow_p95'), 1)} |")
+    if truth_elbows:
+        lines.append(f"| truth (reference) | 1 | {_fmt(truth_elbows[0], 1)} / {_fmt(truth_elbows[1], 1)} |")
+    lines += ["", f"Distance: horizontal root travel over {first.get('travel_windows', 0)} windows of "
+              "10 s in which the root truly moved more than 0.5 m. Elbow angle: the rotation angle "
+              "of both elbows' local rotations (bend and twist), every frame.", ""]
+    return lines
 
 
 def _finish_plot(fig, ax, xlabel, ylabel, title, path):
@@ -760,6 +821,7 @@ def evaluate(motions, models=(), checkpoint=None, out_dir=RESULTS_DIR, seed=0, l
             "torch": "mirror-averaged (model.MirrorEnsemble)" if mirror else "single network",
             "checkpoint": _shown_path(checkpoint) if checkpoint else None, "torch_onnx_diff": diff}
     tj = truth_jitter(clips)
+    meta["truth_elbows"] = truth_elbows(clips)
     report = write_report(out_dir, results, meta, lat, params, tj)
     write_clip_table(out_dir, results)
     write_plots(out_dir, results, accs, clips)
@@ -918,7 +980,8 @@ def main(args=None) -> int:
         print(f"{name:14s} angle {s['angle_all']:6.2f} deg (DIP15 {s['angle_dip']:6.2f})  SIP "
               f"{s['sip']:6.2f}  pos {s['pos']:6.2f} cm  drift 2/5/10 s {shown(s['drift_2s'], 3)} / "
               f"{shown(s['drift_5s'], 3)} / {shown(s['drift_10s'], 3)} m  jitter "
-              f"{shown(s['jitter'], 2)} x10^2 m/s^3")
+              f"{shown(s['jitter'], 2)} x10^2 m/s^3  travel x{shown(s['travel_ratio'], 3)}  elbow "
+              f"p5/p95 {shown(s['elbow_p5'], 1)} / {shown(s['elbow_p95'], 1)} deg")
     if r["latency"]:
         print(f"latency (ORT, T=1, 1 thread): p50 {r['latency']['p50_us']:.0f} us, p99 "
               f"{r['latency']['p99_us']:.0f} us")

@@ -35,6 +35,30 @@ def test_drift_and_jitter_on_known_signals():
     assert ev.jitter(cubic, fps) == pytest.approx(6.0, rel=1e-6)
 
 
+def test_travel_ratio_reads_speed_and_counts_only_moving_windows():
+    fps = 60.0
+    t = np.arange(0, 30, 1 / fps)
+    walk = np.stack([1.2 * t, 0.05 * np.sin(t), 0 * t], -1)     # 1.2 m/s along x, bobbing
+    vel = np.gradient(walk, 1 / fps, axis=0)
+    assert np.allclose(ev.travel_ratios(vel, walk, fps), 1.0, atol=0.01)
+    slow = ev.travel_ratios(vel * [0.9, 1.0, 1.0], walk, fps)
+    assert len(slow) == 20 and np.allclose(slow, 0.9, atol=0.01)
+    # a heading error keeps the distance: the ratio is the speed's, not the direction's
+    turned = vel @ sk.rot_axis("y", np.radians(40.0)).T
+    assert np.allclose(ev.travel_ratios(turned, walk, fps), 1.0, atol=0.01)
+    standing = np.zeros_like(walk)
+    assert len(ev.travel_ratios(vel, standing, fps)) == 0     # never moved 0.5 m: no window
+
+
+def test_elbow_angles_are_the_elbows_own_rotation():
+    local = np.broadcast_to(np.eye(3), (5, 24, 3, 3)).copy()
+    local[:, sk.JOINT_NAMES.index("left_elbow")] = sk.rot_axis("y", np.radians(70.0))
+    local[:, sk.JOINT_NAMES.index("right_elbow")] = sk.rot_axis("x", np.radians(-15.0))
+    local[:, sk.JOINT_NAMES.index("left_wrist")] = sk.rot_axis("z", np.radians(90.0))   # not an elbow
+    a = ev.elbow_angles(local).reshape(5, 2)
+    assert np.allclose(a[:, 0], 70.0, atol=1e-4) and np.allclose(a[:, 1], 15.0, atol=1e-4)
+
+
 def test_baseline_puts_sensor_orientations_on_their_bones():
     m = procedural.make_motion("mixed", 2.0, seed=3)
     rng = np.random.default_rng(0)
@@ -134,6 +158,11 @@ def test_evaluate_end_to_end(tmp_path):
         assert r["latency"]["calls"] == 120 and r["latency"]["p50_us"] > 0
     text = (out / "evaluation.md").read_text()
     assert "| baseline |" in text and "<= 10 deg" in text and "<= 4 M" in text
+    # the baseline holds every bone without a sensor at rest: straight elbows (they carry no
+    # sensor); 6 s clips hold no 10 s window, so no travel ratio, shown as "-"
+    assert res["baseline"]["elbow_p95"] == pytest.approx(0.0, abs=1e-3)
+    assert res["baseline"]["travel_windows"] == 0 and np.isnan(res["baseline"]["travel_ratio"])
+    assert "## Speed and reach" in text and "| baseline | - | 0.0 / 0.0 |" in text
     assert "## Per joint" in text and "| 20 left_wrist |" in text and "| 23 right_hand |" in text
     wrist = next(line for line in text.splitlines() if line.startswith("| 20 left_wrist |"))
     assert len(wrist.split("|")) == 2 + 1 + 2 * len(res)                       # joint + 2 per method
