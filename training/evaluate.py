@@ -299,16 +299,21 @@ def root_aligned_positions(local_rot, offsets):
     return g, p
 
 
-def drift_errors(pred_vel, true_root, fps, window_s, step_s=1.0):
-    """Root drift per window: |integrated predicted displacement - true displacement| (m)."""
+def _window_displacements(pred_vel, true_root, fps, window_s, step_s=1.0) -> tuple:
+    """Root displacement over windows starting every step_s: (predicted by the integrated
+    velocity, true), each (W, 3); none when the clip is not longer than one window."""
     T = len(true_root)
     w = int(round(window_s * fps))
     if T <= w:
-        return np.zeros(0)
+        return np.zeros((0, 3)), np.zeros((0, 3))
     pred_pos = np.concatenate([np.zeros((1, 3)), np.cumsum(pred_vel[1:], axis=0) / fps])
     starts = np.arange(0, T - w, max(1, int(round(step_s * fps))))
-    d_pred = pred_pos[starts + w] - pred_pos[starts]
-    d_true = true_root[starts + w] - true_root[starts]
+    return pred_pos[starts + w] - pred_pos[starts], true_root[starts + w] - true_root[starts]
+
+
+def drift_errors(pred_vel, true_root, fps, window_s, step_s=1.0):
+    """Root drift per window: |integrated predicted displacement - true displacement| (m)."""
+    d_pred, d_true = _window_displacements(pred_vel, true_root, fps, window_s, step_s)
     return np.linalg.norm(d_pred - d_true, axis=-1)
 
 
@@ -316,14 +321,9 @@ def travel_ratios(pred_vel, true_root, fps, window_s=10.0, min_travel=0.5, step_
     """Per window in which the root truly travels more than `min_travel` m horizontally: the
     predicted horizontal distance (integrated velocity) over the true one. Below 1 the model
     reads the motion as slower than it was; the along-track share of drift."""
-    T = len(true_root)
-    w = int(round(window_s * fps))
-    if T <= w:
-        return np.zeros(0)
-    pred_pos = np.concatenate([np.zeros((1, 3)), np.cumsum(pred_vel[1:], axis=0) / fps])
-    starts = np.arange(0, T - w, max(1, int(round(step_s * fps))))
-    true_d = np.linalg.norm((true_root[starts + w] - true_root[starts])[:, [0, 2]], axis=-1)
-    pred_d = np.linalg.norm((pred_pos[starts + w] - pred_pos[starts])[:, [0, 2]], axis=-1)
+    d_pred, d_true = _window_displacements(pred_vel, true_root, fps, window_s, step_s)
+    true_d = np.linalg.norm(d_true[:, [0, 2]], axis=-1)
+    pred_d = np.linalg.norm(d_pred[:, [0, 2]], axis=-1)
     moving = true_d > min_travel
     return pred_d[moving] / true_d[moving]
 

@@ -307,14 +307,19 @@ def _mirrored(o, a):
     return m, m @ o[:, :, se.mirror_indices()] @ m, a[:, :, se.mirror_indices()] @ m
 
 
-def test_mirror_ensemble_is_exactly_mirror_equivariant_where_the_single_network_is_not():
-    """The same motion performed mirror-image must give the mirror-image pose, left and right
-    swapped: this fails for a wrong sensor swap, joint swap, reflection or contact order."""
+def _anchored_pair():
+    """An anchored network with a visible output layer, and its mirror-averaged pair."""
     net = _trained_like()
     net.enable_anchoring()
     with torch.no_grad():
         net.head[-1].weight.normal_(0, 0.3)
-    ens = MirrorEnsemble(net).eval()
+    return net, MirrorEnsemble(net).eval()
+
+
+def test_mirror_ensemble_is_exactly_mirror_equivariant_where_the_single_network_is_not():
+    """The same motion performed mirror-image must give the mirror-image pose, left and right
+    swapped: this fails for a wrong sensor swap, joint swap, reflection or contact order."""
+    net, ens = _anchored_pair()
     o, a = _inputs(seconds=0.5)
     m, om, am = _mirrored(o, a)
     with torch.no_grad():
@@ -338,11 +343,7 @@ def test_the_pair_averages_each_branchs_unit_columns_before_one_gram_schmidt():
     columns (forward_raw = gram_schmidt(forward_columns)); the pair sums both branches' columns
     scaled to unit length, the mirrored one reflected back with its joints swapped, and
     orthonormalises once. A rule on the branches' rotations instead (or no scaling) differs."""
-    net = _trained_like()
-    net.enable_anchoring()
-    with torch.no_grad():
-        net.head[-1].weight.normal_(0, 0.3)
-    ens = MirrorEnsemble(net).eval()
+    net, ens = _anchored_pair()
     o, a = _inputs(seconds=0.5)
     m, om, am = _mirrored(o, a)
     with torch.no_grad():
