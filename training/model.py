@@ -328,7 +328,7 @@ def heading_rotation(pelvis: torch.Tensor) -> torch.Tensor:
     xz = pelvis[..., [0, 2], :]                                   # rows x and z: (..., 2, 3)
     h = xz[..., 2] - pelvis[..., 1:2, 2] * xz[..., 1]             # f_xz - f_y * u_xz
     sc = _unit(h)                                                 # (sin, cos) of the heading
-    rows = sc @ _RY_BASIS.to(pelvis.dtype) + _RY_UP.to(pelvis.dtype)
+    rows = sc @ _RY_BASIS.to(pelvis.device, pelvis.dtype) + _RY_UP.to(pelvis.device, pelvis.dtype)
     return _reshape_tail(rows, pelvis.dim() - 2, (3, 3))
 
 
