@@ -1,7 +1,8 @@
 """cv: a training recipe scored by cross-validation over subject folds.
 
-    python3 -m training cv --steps N [--folds 4] [--out training/results/cv] [--runs DIR]
+    python3 -m training cv --steps N [--folds 4] [--jobs J] [--out training/results/cv] [--runs DIR]
         [--packs DIR] [--eval-max-seconds S] [train options: --size, --seed, --lr, augmentation ...]
+    python3 -m training cv --compare A/cv.json B/cv.json
 
 One validation set of a few subjects is a noisy judge: choosing among runs by it fits those
 people (twelve fine-tunes once moved error between the validation subjects without closing the
@@ -10,8 +11,9 @@ of about equal motion (whole subjects, never split); the recipe given by the tra
 trained K times, each time on K - 1 folds, and scored on the fold it never saw. The test split
 takes no part. The report gives each fold's joint angle error, position error and 10 s root drift
 (`evaluate`'s definitions, realistic sensor noise, the mirror-averaged network as exported), their
-mean and the spread between folds (standard deviation, lowest and highest): a difference
-between two recipes smaller than that spread is not evidence.
+mean and the spread between folds (standard deviation, lowest and highest). Most of that spread
+is the people (the same folds rank alike under different recipes), so two recipes run over the
+same folds compare fold by fold (--compare): the spread of the paired differences is the noise.
 
 Inside each run the trainer keeps the checkpoint that scores best on an inner validation set
 (every 10th subject of its own training folds, held out of its training), so the fold it is
@@ -29,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import shlex
 import time
 from dataclasses import replace
@@ -37,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from .cli import POSITIVE_INT, number_type
-from .errors import UsageError
+from .errors import CommandError, UsageError
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = REPO / "training" / "results" / "cv"
@@ -86,40 +89,118 @@ def spread(values) -> dict:
             "min": float(v.min()), "max": float(v.max())}
 
 
-def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progress=print) -> dict:
-    """Trains cfg's recipe once per fold and scores each run on its held-out fold."""
+def score_fold(i: int, folds, motions, cfg, runs_dir: Path, eval_max_seconds=None, progress=print) -> dict:
+    """Trains cfg's recipe on every fold but fold i (0-based) and scores it on fold i's people.
+    The row is also written to RUNS/foldN/row.json, so folds trained at once (or a run cut short)
+    leave what they measured."""
     from .evaluate import evaluate
-    from .train import train
+    from .train import pick_device, train
+    k = len(folds)
+    held = folds[i]
+    held_set = set(held)
+    test_motions = [m for m in motions if int(m.subject) in held_set]
+    fit_motions, inner = inner_validation([m for m in motions if int(m.subject) not in held_set])
+    fold_dir = Path(runs_dir) / f"fold{i + 1}"
+    fold_cfg = replace(cfg, ckpt_dir=str(fold_dir / "checkpoints"), results_dir=str(fold_dir / "results"),
+                       train_source=f"cv fold {i + 1} of {k}: the other folds",
+                       val_source=f"cv fold {i + 1} of {k}: inner validation subjects")
+    progress(f"cv: fold {i + 1}/{k}: training on {len(fit_motions)} clips "
+             f"({len(inner)} inner validation), held out subjects {', '.join(map(str, held))}")
+    t0 = time.monotonic()
+    trained = train(fold_cfg, motions=fit_motions, val_motions=inner)
+    train_minutes = (time.monotonic() - t0) / 60.0
+    ckpt = fold_dir / "checkpoints" / "best.pt"
+    if not ckpt.is_file():
+        ckpt = fold_dir / "checkpoints" / "last.pt"
+    scored = test_motions
+    if eval_max_seconds:
+        from .evaluate import _trim
+        scored = _trim(test_motions, None, eval_max_seconds)
+    r = evaluate(scored, models=(), checkpoint=str(ckpt), out_dir=fold_dir / "eval", latency=False,
+                 source=f"fold {i + 1} (subjects {', '.join(map(str, held))})", progress=False,
+                 torch_device=str(pick_device(cfg.device)))
+    s = r["results"]["PyTorch fp32"]
+    row = {"fold": i + 1, "subjects": held, "clips": len(test_motions),
+           "minutes": sum(m.num_frames / m.fps for m in test_motions) / 60.0,
+           "checkpoint": ckpt.name, "steps": int(trained.get("steps", 0)),
+           **{key: float(s[key]) for key, _, _ in METRICS},
+           "train_minutes": train_minutes}
+    tmp = fold_dir / "row.json.tmp"
+    tmp.write_text(json.dumps(row, indent=1))
+    os.replace(tmp, fold_dir / "row.json")
+    progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {row[key]:.{d}f}" for key, label, d in METRICS))
+    return row
+
+
+def _fold_process(i, folds, motions, cfg, runs_dir, eval_max_seconds) -> None:
+    """Body of a fold trained beside others: its console goes to RUNS/foldN/console.log."""
+    log_path = Path(runs_dir) / f"fold{i + 1}" / "console.log"
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    with open(log_path, "w", buffering=1) as log:
+        os.dup2(log.fileno(), 1)
+        os.dup2(log.fileno(), 2)
+        import sys
+        sys.stdout = sys.stderr = log
+        try:
+            score_fold(i, folds, motions, cfg, runs_dir, eval_max_seconds)
+        except BaseException as e:   # the parent reads the cause from the log
+            import traceback
+            traceback.print_exc()
+            log.flush()
+            os._exit(3 if isinstance(e, (UsageError, CommandError)) else 1)
+    os._exit(0)
+
+
+def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progress=print,
+              jobs: int = 1) -> dict:
+    """Trains cfg's recipe once per fold and scores each run on its held-out fold; jobs > 1 trains
+    that many folds at once, each in a process of its own (a GPU that one run leaves half idle,
+    or cores to spare: give each fold its own --data-workers)."""
     folds = subject_folds(motions, k)
-    rows = []
-    for i, held in enumerate(folds):
-        held_set = set(held)
-        test_motions = [m for m in motions if int(m.subject) in held_set]
-        fit_motions, inner = inner_validation([m for m in motions if int(m.subject) not in held_set])
-        fold_dir = Path(runs_dir) / f"fold{i + 1}"
-        fold_cfg = replace(cfg, ckpt_dir=str(fold_dir / "checkpoints"), results_dir=str(fold_dir / "results"),
-                           train_source=f"cv fold {i + 1} of {k}: the other folds",
-                           val_source=f"cv fold {i + 1} of {k}: inner validation subjects")
-        progress(f"cv: fold {i + 1}/{k}: training on {len(fit_motions)} clips "
-                 f"({len(inner)} inner validation), held out subjects {', '.join(map(str, held))}")
-        t0 = time.monotonic()
-        trained = train(fold_cfg, motions=fit_motions, val_motions=inner)
-        ckpt = fold_dir / "checkpoints" / "best.pt"
-        if not ckpt.is_file():
-            ckpt = fold_dir / "checkpoints" / "last.pt"
-        scored = test_motions
-        if eval_max_seconds:
-            from .evaluate import _trim
-            scored = _trim(test_motions, None, eval_max_seconds)
-        r = evaluate(scored, models=(), checkpoint=str(ckpt), out_dir=fold_dir / "eval", latency=False,
-                     source=f"fold {i + 1} (subjects {', '.join(map(str, held))})", progress=False)
-        s = r["results"]["PyTorch fp32"]
-        rows.append({"fold": i + 1, "subjects": held, "clips": len(test_motions),
-                     "minutes": sum(m.num_frames / m.fps for m in test_motions) / 60.0,
-                     "checkpoint": ckpt.name, "steps": int(trained.get("steps", 0)),
-                     **{key: float(s[key]) for key, _, _ in METRICS},
-                     "train_minutes": (time.monotonic() - t0) / 60.0})
-        progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {rows[-1][key]:.{d}f}" for key, label, d in METRICS))
+    runs_dir = Path(runs_dir)
+    if jobs <= 1:
+        rows = [score_fold(i, folds, motions, cfg, runs_dir, eval_max_seconds, progress) for i in range(k)]
+        return {"folds": rows, "summary": {key: spread([r[key] for r in rows]) for key, _, _ in METRICS}}
+    import multiprocessing
+    import multiprocessing.connection
+    # fork: the children share the loaded motions without copying them; the parent has touched
+    # no GPU, so each child starts its own CUDA context
+    ctx = multiprocessing.get_context("fork")
+    pending, running, failed = list(range(k)), {}, []
+    for i in range(k):
+        stale = runs_dir / f"fold{i + 1}" / "row.json"
+        if stale.exists():
+            stale.unlink()
+    while pending or running:
+        while pending and len(running) < jobs:
+            i = pending.pop(0)
+            proc = ctx.Process(target=_fold_process, args=(i, folds, motions, cfg, runs_dir, eval_max_seconds))
+            proc.start()
+            running[i] = proc
+            progress(f"cv: fold {i + 1}/{k} started (held out subjects {', '.join(map(str, folds[i]))}); "
+                     f"its console: {runs_dir / f'fold{i + 1}' / 'console.log'}")
+        multiprocessing.connection.wait([p.sentinel for p in running.values()])
+        for i, proc in list(running.items()):
+            if proc.exitcode is None:
+                continue
+            del running[i]
+            row_path = runs_dir / f"fold{i + 1}" / "row.json"
+            if proc.exitcode != 0 or not row_path.is_file():
+                failed.append(i + 1)
+                progress(f"cv: fold {i + 1} FAILED (exit {proc.exitcode}); see its console.log")
+                continue
+            row = json.loads(row_path.read_text())
+            progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {row[key]:.{d}f}" for key, label, d in METRICS))
+    if failed:
+        tails = []
+        for n in sorted(failed):
+            log = runs_dir / f"fold{n}" / "console.log"
+            lines = log.read_text(errors="replace").strip().splitlines() if log.is_file() else []
+            tails.append(f"fold {n}: {lines[-1] if lines else 'no output'} ({log})")
+        raise CommandError(f"{len(failed)} of {k} folds failed (a fold that finished left its row in "
+                           f"{runs_dir}/foldN/row.json): "
+                           + "; ".join(tails))
+    rows = [json.loads((runs_dir / f"fold{i + 1}" / "row.json").read_text()) for i in range(k)]
     return {"folds": rows, "summary": {key: spread([r[key] for r in rows]) for key, _, _ in METRICS}}
 
 
@@ -143,8 +224,14 @@ def write_report(out_dir: Path, result: dict, meta: dict) -> Path:
     lines.append("| **mean** | | | | | " + " | ".join(f"**{s[key]['mean']:.{d}f}**" for key, _, d in METRICS) + " |")
     lines.append("| spread: std (min - max) | | | | | " + " | ".join(
         f"{s[key]['std']:.{d}f} ({s[key]['min']:.{d}f} - {s[key]['max']:.{d}f})" for key, _, d in METRICS) + " |")
+    jobs = meta.get("jobs") or 1
     lines += ["", f"Training took {sum(r['train_minutes'] for r in result['folds']):.0f} min in all "
-              f"({meta.get('device', 'this machine')}). A recipe beats another only by more than this spread.", ""]
+              f"({meta.get('device', 'this machine')}"
+              + (f"; {jobs} folds at once, so about {max(r['train_minutes'] for r in result['folds']):.0f} "
+                 "min of wall clock" if jobs > 1 else "") + "). "
+              "The spread between folds is mostly the people in them (folds rank alike under different "
+              "recipes): compare two recipes fold by fold (`cv --compare A/cv.json B/cv.json`), where "
+              "the noise is the spread of the paired differences.", ""]
     path = out_dir / "cv.md"
     path.write_text("\n".join(lines))
     (out_dir / "cv.json").write_text(json.dumps({"meta": meta, **result}, indent=1))
@@ -160,6 +247,10 @@ def add_arguments(p):
                    "(default training/data/cv)")
     p.add_argument("--packs", default=None, help="read the people from PACKS/train.mpack and "
                    "PACKS/val.mpack (training pack) instead of the CMU cache: a GPU machine without the data")
+    p.add_argument("--compare", nargs=2, metavar=("A.json", "B.json"), default=None,
+                   help="no training: A minus B fold by fold, two cv.json of the same folds")
+    p.add_argument("--jobs", type=POSITIVE_INT, default=1,
+                   help="folds trained at once, each in its own process (default 1)")
     p.add_argument("--eval-max-seconds", dest="eval_max_seconds", type=POSITIVE_INT, default=None,
                    help="score only the first S seconds of each held-out clip (faster)")
     train_arguments(p)
@@ -174,11 +265,74 @@ def recipe_options(argv) -> list:
             skip = False
             continue
         name = a.split("=", 1)[0]
-        if name in ("--folds", "--out", "--runs", "--packs", "--eval-max-seconds"):
+        if name in ("--folds", "--out", "--runs", "--packs", "--eval-max-seconds", "--jobs", "--compare"):
             skip = "=" not in a
             continue
         out.append(a)
     return out
+
+
+PATH_OPTIONS = ("--runs", "--out", "--packs")
+
+
+def shown_command(argv) -> str:
+    """The cv command line as a committed report shows it: folder options repository-relative
+    where they can be, else their last component (a lease's temporary folders name no machine)."""
+    from .evaluate import _shown_path
+    out, path_next = [], False
+    for a in argv:
+        name, eq, value = a.partition("=")
+        if path_next:
+            a, path_next = _shown_path(a), False
+        elif name in PATH_OPTIONS:
+            if eq:
+                a = f"{name}={_shown_path(value)}"
+            else:
+                path_next = True
+        out.append(a)
+    return "python3 -m training cv " + " ".join(shlex.quote(a) for a in out)
+
+
+def paired_differences(result: dict, baseline: dict) -> dict:
+    """Fold by fold, result minus baseline (two cv.json of the same folds). Most of the spread
+    between folds is the people in them (the same folds rank alike under different recipes), so
+    a difference measured on the same folds is far less noisy than the spread."""
+    a, b = result["folds"], baseline["folds"]
+    if [r["subjects"] for r in a] != [r["subjects"] for r in b]:
+        raise UsageError("the two cross-validations hold different folds (another --folds or other "
+                         "people); only runs over the same folds compare fold by fold")
+    out = {}
+    for key, _, _ in METRICS:
+        d = [float(x[key]) - float(y[key]) for x, y in zip(a, b)]
+        out[key] = {"per_fold": d, **spread(d), "lower": sum(v < 0 for v in d)}
+    return out
+
+
+def compare_report(result: dict, baseline: dict, names=("A", "B")) -> str:
+    """A markdown table of paired_differences."""
+    diff = paired_differences(result, baseline)
+    k = len(result["folds"])
+    lines = [f"{names[0]} minus {names[1]}, fold by fold (negative: {names[0]} is better):", "",
+             "| | " + " | ".join(f"fold {r['fold']}" for r in result["folds"]) + " | mean | std | folds lower |",
+             "|---|" + "---|" * (k + 3)]
+    for key, label, d in METRICS:
+        v = diff[key]
+        lines.append(f"| {label} | " + " | ".join(f"{x:+.{d}f}" for x in v["per_fold"])
+                     + f" | {v['mean']:+.{d}f} | {v['std']:.{d}f} | {v['lower']} of {k} |")
+    return "\n".join(lines)
+
+
+def compare_main(paths) -> int:
+    runs = []
+    for path in paths:
+        try:
+            runs.append(json.loads(Path(path).read_text()))
+        except (OSError, ValueError) as e:
+            raise UsageError(f"--compare {path}: not a cv.json ({e})") from e
+        if not isinstance(runs[-1], dict) or not runs[-1].get("folds"):
+            raise UsageError(f"--compare {path}: not a cv.json (no folds)")
+    print(compare_report(runs[0], runs[1], tuple(str(p) for p in paths)))
+    return 0
 
 
 def main(args=None) -> int:
@@ -186,6 +340,8 @@ def main(args=None) -> int:
     argv = list(args) if isinstance(args, list) else sys.argv[2:]
     if args is None or isinstance(args, list):
         args = add_arguments(argparse.ArgumentParser(prog="python3 -m training cv")).parse_args(argv)
+    if getattr(args, "compare", None):
+        return compare_main(args.compare)
     given = [option for attr, option in REFUSED if getattr(args, attr, None) not in (None, False)]
     if given:
         raise UsageError(f"{' '.join(given)}: cv trains on folds of the train and validation people "
@@ -207,15 +363,18 @@ def main(args=None) -> int:
     else:
         motions = dataset.load_motions("train") + dataset.load_motions("val")
     recipe = " ".join(shlex.quote(a) for a in recipe_options(argv)) or "the default recipe"
-    command = "python3 -m training cv " + " ".join(shlex.quote(a) for a in argv)
+    command = shown_command(argv)
     print(f"cv: {len(motions)} clips, {len({int(m.subject) for m in motions})} subjects, "
           f"{args.folds} folds; recipe: {recipe}")
-    result = run_folds(motions, cfg, args.folds, Path(args.runs), args.eval_max_seconds)
+    result = run_folds(motions, cfg, args.folds, Path(args.runs), args.eval_max_seconds,
+                       jobs=args.jobs)
     meta = {"recipe": recipe, "command": command, "clips": len(motions),
-            "eval_max_seconds": args.eval_max_seconds,
+            "eval_max_seconds": args.eval_max_seconds, "jobs": args.jobs,
             "subjects": len({int(m.subject) for m in motions}), "device": cfg.device or "auto"}
     path = write_report(Path(args.out), result, meta)
     s = result["summary"]
     print("cv: " + "  ".join(f"{label} {s[key]['mean']:.{d}f} +- {s[key]['std']:.{d}f}"
                              for key, label, d in METRICS) + f"; report {path}")
-    return 0 if all(math.isfinite(s[key]["mean"]) for key, _, _ in METRICS) else 1
+    # drift has no value where no held-out clip lasts 10 s; a pose error that is not finite is a
+    # broken run
+    return 0 if all(math.isfinite(s[key]["mean"]) for key in ("angle_all", "pos")) else 1
