@@ -121,6 +121,7 @@ def leg_height(offsets: np.ndarray = DEFAULT_OFFSETS) -> float:
 # Each joint's counterpart on the other side of the body (itself on the midline).
 MIRROR_JOINTS = [0, 2, 1, 3, 5, 4, 6, 8, 7, 9, 11, 10, 12, 14, 13, 15, 17, 16, 19, 18, 21, 20, 23, 22]
 _REFLECT_X = np.diag([-1.0, 1.0, 1.0])
+_REFLECT_ROTATION_SIGNS = np.outer(np.diag(_REFLECT_X), np.diag(_REFLECT_X))
 
 
 def mirror_motion(local_rot, root_pos, offsets):
@@ -130,7 +131,8 @@ def mirror_motion(local_rot, root_pos, offsets):
     Returns (local_rot, root_pos, offsets) as new arrays; applying it twice gives the input back."""
     m = _REFLECT_X
     local = np.asarray(local_rot)[..., MIRROR_JOINTS, :, :]
-    local = (m @ local @ m).astype(np.asarray(local_rot).dtype)
+    # M R M with a diagonal M of signs is R with those signs flipped, without two products
+    local = (local * _REFLECT_ROTATION_SIGNS).astype(np.asarray(local_rot).dtype)
     root = (np.asarray(root_pos) @ m).astype(np.asarray(root_pos).dtype)
     off = (np.asarray(offsets)[..., MIRROR_JOINTS, :] @ m).astype(np.asarray(offsets).dtype)
     return local, root, off
@@ -240,20 +242,33 @@ def twist_about_x(rot):
 
 def quat_from_rot(rot):
     """Rotation matrices (...,3,3) -> unit quaternions (w,x,y,z) (...,4) with w >= 0.
-    Uses the largest-diagonal branch per element (numerically stable)."""
+    Uses the largest-diagonal branch per element (numerically stable): each element's quaternion
+    comes from the one row of 4 q_b q that its largest of (trace, m00, m11, m22) picks, computed
+    for the elements of that branch only (training synthesis converts every clip it plays)."""
     R = np.asarray(rot, dtype=np.float64)
-    m00, m11, m22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
-    tr = m00 + m11 + m22
-    cand = np.stack([
-        np.stack([1 + tr, R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1),
-        np.stack([R[..., 2, 1] - R[..., 1, 2], 1 + m00 - m11 - m22, R[..., 0, 1] + R[..., 1, 0], R[..., 0, 2] + R[..., 2, 0]], -1),
-        np.stack([R[..., 0, 2] - R[..., 2, 0], R[..., 0, 1] + R[..., 1, 0], 1 - m00 + m11 - m22, R[..., 1, 2] + R[..., 2, 1]], -1),
-        np.stack([R[..., 1, 0] - R[..., 0, 1], R[..., 0, 2] + R[..., 2, 0], R[..., 1, 2] + R[..., 2, 1], 1 - m00 - m11 + m22], -1),
-    ], axis=-2)  # (...,4,4): row b is 4 q_b q
-    b = np.argmax(np.stack([tr, m00, m11, m22], -1), axis=-1)
-    q = np.take_along_axis(cand, b[..., None, None], axis=-2)[..., 0, :]
+    shape = R.shape[:-2]
+    R = R.reshape(-1, 3, 3)
+    m00, m11, m22 = R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]
+    branch = np.argmax(np.stack([m00 + m11 + m22, m00, m11, m22], -1), axis=-1)
+    q = np.empty((R.shape[0], 4))
+    for b in range(4):
+        i = np.flatnonzero(branch == b)
+        if i.size == 0:
+            continue
+        r = R[i]
+        a00, a11, a22 = r[:, 0, 0], r[:, 1, 1], r[:, 2, 2]
+        if b == 0:
+            row = (1 + (a00 + a11 + a22), r[:, 2, 1] - r[:, 1, 2], r[:, 0, 2] - r[:, 2, 0], r[:, 1, 0] - r[:, 0, 1])
+        elif b == 1:
+            row = (r[:, 2, 1] - r[:, 1, 2], 1 + a00 - a11 - a22, r[:, 0, 1] + r[:, 1, 0], r[:, 0, 2] + r[:, 2, 0])
+        elif b == 2:
+            row = (r[:, 0, 2] - r[:, 2, 0], r[:, 0, 1] + r[:, 1, 0], 1 - a00 + a11 - a22, r[:, 1, 2] + r[:, 2, 1])
+        else:
+            row = (r[:, 1, 0] - r[:, 0, 1], r[:, 0, 2] + r[:, 2, 0], r[:, 1, 2] + r[:, 2, 1], 1 - a00 - a11 + a22)
+        q[i] = np.stack(row, -1)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return q * np.where(q[..., :1] < 0, -1.0, 1.0)
+    q = q * np.where(q[:, :1] < 0, -1.0, 1.0)
+    return q.reshape(shape + (4,))
 
 
 def quat_mul(a, b):

@@ -89,6 +89,18 @@ def test_quaternions(rng):
                        R[:5] @ R[5:10])
 
 
+def test_quaternions_from_every_branch_in_any_shape(rng):
+    # near 180 deg about x, y, z (the m00, m11, m22 branches) and small turns (the trace branch),
+    # mixed in one stack of any leading shape: each element takes its own branch
+    turns = [sk.rot_axis(a, np.pi - 0.1) for a in "xyz"] + [sk.rot_axis("x", 0.1)]
+    stack = np.stack(turns * 3 + list(sk.random_rotations(12, rng))).reshape(2, 3, 4, 3, 3)
+    q = sk.quat_from_rot(stack)
+    assert q.shape == (2, 3, 4, 4) and np.all(q[..., 0] >= 0)
+    assert np.allclose(sk.rot_from_quat(q), stack, atol=1e-12)
+    assert np.allclose(np.abs(q[0, 0, :3, 1:]), np.eye(3) * np.cos(0.05), atol=1e-12)   # the axis, w small
+    assert sk.quat_from_rot(np.eye(3)).shape == (4,) and sk.quat_from_rot(np.zeros((0, 3, 3))).shape == (0, 4)
+
+
 def test_slerp():
     a = sk.rot_axis("y", 0.2)
     b = sk.rot_axis("y", 1.0)
