@@ -45,7 +45,20 @@ from .errors import CommandError, UsageError
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = REPO / "training" / "results" / "cv"
 DEFAULT_RUNS = REPO / "training" / "data" / "cv"
-METRICS = (("angle_all", "angle (deg)", 2), ("pos", "position (cm)", 2), ("drift_10s", "drift 10 s (m)", 3))
+# travel_ratio: the median of predicted / true horizontal distance over 10 s windows (evaluate's);
+# measured on people the run never saw, it is the speed a network shrinks to on new people, which
+# no validation figure can set without fitting its subjects
+METRICS = (("angle_all", "angle (deg)", 2), ("pos", "position (cm)", 2), ("drift_10s", "drift 10 s (m)", 3),
+           ("travel_ratio", "travel, predicted / true", 3))
+
+
+def _cell(value, digits: int) -> str:
+    return "-" if value is None or not math.isfinite(float(value)) else f"{float(value):.{digits}f}"
+
+
+def _summary(rows) -> dict:
+    """Mean and spread per metric over the folds (metrics that every row has)."""
+    return {key: spread([r[key] for r in rows]) for key, _, _ in METRICS if all(key in r for r in rows)}
 REFUSED = (("bvh", "--bvh"), ("val_bvh", "--val-bvh"), ("max_clips", "--max-clips"),
            ("smoke", "--smoke"), ("init_from", "--init-from"), ("resume", "--resume"),
            ("ckpt_dir", "--ckpt-dir"), ("results_dir", "--results-dir"))
@@ -128,7 +141,7 @@ def score_fold(i: int, folds, motions, cfg, runs_dir: Path, eval_max_seconds=Non
     tmp = fold_dir / "row.json.tmp"
     tmp.write_text(json.dumps(row, indent=1))
     os.replace(tmp, fold_dir / "row.json")
-    progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {row[key]:.{d}f}" for key, label, d in METRICS))
+    progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {_cell(row.get(key), d)}" for key, label, d in METRICS))
     return row
 
 
@@ -160,7 +173,7 @@ def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progr
     runs_dir = Path(runs_dir)
     if jobs <= 1:
         rows = [score_fold(i, folds, motions, cfg, runs_dir, eval_max_seconds, progress) for i in range(k)]
-        return {"folds": rows, "summary": {key: spread([r[key] for r in rows]) for key, _, _ in METRICS}}
+        return {"folds": rows, "summary": _summary(rows)}
     import multiprocessing
     import multiprocessing.connection
     # fork: the children share the loaded motions without copying them; the parent has touched
@@ -190,7 +203,7 @@ def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progr
                 progress(f"cv: fold {i + 1} FAILED (exit {proc.exitcode}); see its console.log")
                 continue
             row = json.loads(row_path.read_text())
-            progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {row[key]:.{d}f}" for key, label, d in METRICS))
+            progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {_cell(row.get(key), d)}" for key, label, d in METRICS))
     if failed:
         tails = []
         for n in sorted(failed):
@@ -201,7 +214,7 @@ def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progr
                            f"{runs_dir}/foldN/row.json): "
                            + "; ".join(tails))
     rows = [json.loads((runs_dir / f"fold{i + 1}" / "row.json").read_text()) for i in range(k)]
-    return {"folds": rows, "summary": {key: spread([r[key] for r in rows]) for key, _, _ in METRICS}}
+    return {"folds": rows, "summary": _summary(rows)}
 
 
 def write_report(out_dir: Path, result: dict, meta: dict) -> Path:
@@ -219,11 +232,13 @@ def write_report(out_dir: Path, result: dict, meta: dict) -> Path:
              "|---|---|---|---|---|" + "---|" * len(METRICS)]
     for r in result["folds"]:
         lines.append(f"| {r['fold']} | {', '.join(map(str, r['subjects']))} | {r['clips']} | {r['minutes']:.0f} | "
-                     f"{r.get('steps', '-')} | " + " | ".join(f"{r[key]:.{d}f}" for key, _, d in METRICS) + " |")
+                     f"{r.get('steps', '-')} | " + " | ".join(_cell(r.get(key), d) for key, _, d in METRICS) + " |")
     s = result["summary"]
-    lines.append("| **mean** | | | | | " + " | ".join(f"**{s[key]['mean']:.{d}f}**" for key, _, d in METRICS) + " |")
+    lines.append("| **mean** | | | | | " + " | ".join(f"**{_cell(s[key]['mean'], d)}**" if key in s else "-"
+                                                      for key, _, d in METRICS) + " |")
     lines.append("| spread: std (min - max) | | | | | " + " | ".join(
-        f"{s[key]['std']:.{d}f} ({s[key]['min']:.{d}f} - {s[key]['max']:.{d}f})" for key, _, d in METRICS) + " |")
+        f"{_cell(s[key]['std'], d)} ({_cell(s[key]['min'], d)} - {_cell(s[key]['max'], d)})" if key in s else "-"
+        for key, _, d in METRICS) + " |")
     jobs = meta.get("jobs") or 1
     lines += ["", f"Training took {sum(r['train_minutes'] for r in result['folds']):.0f} min in all "
               f"({meta.get('device', 'this machine')}"
@@ -303,6 +318,8 @@ def paired_differences(result: dict, baseline: dict) -> dict:
                          "people); only runs over the same folds compare fold by fold")
     out = {}
     for key, _, _ in METRICS:
+        if not all(key in r for r in a + b):   # a metric one of the runs predates
+            continue
         d = [float(x[key]) - float(y[key]) for x, y in zip(a, b)]
         out[key] = {"per_fold": d, **spread(d), "lower": sum(v < 0 for v in d)}
     return out
@@ -312,10 +329,13 @@ def compare_report(result: dict, baseline: dict, names=("A", "B")) -> str:
     """A markdown table of paired_differences."""
     diff = paired_differences(result, baseline)
     k = len(result["folds"])
-    lines = [f"{names[0]} minus {names[1]}, fold by fold (negative: {names[0]} is better):", "",
+    lines = [f"{names[0]} minus {names[1]}, fold by fold (for the errors, negative: {names[0]} is better; "
+             "the travel ratio is best at 1):", "",
              "| | " + " | ".join(f"fold {r['fold']}" for r in result["folds"]) + " | mean | std | folds lower |",
              "|---|" + "---|" * (k + 3)]
     for key, label, d in METRICS:
+        if key not in diff:
+            continue
         v = diff[key]
         lines.append(f"| {label} | " + " | ".join(f"{x:+.{d}f}" for x in v["per_fold"])
                      + f" | {v['mean']:+.{d}f} | {v['std']:.{d}f} | {v['lower']} of {k} |")
@@ -373,8 +393,8 @@ def main(args=None) -> int:
             "subjects": len({int(m.subject) for m in motions}), "device": cfg.device or "auto"}
     path = write_report(Path(args.out), result, meta)
     s = result["summary"]
-    print("cv: " + "  ".join(f"{label} {s[key]['mean']:.{d}f} +- {s[key]['std']:.{d}f}"
-                             for key, label, d in METRICS) + f"; report {path}")
+    print("cv: " + "  ".join(f"{label} {_cell(s[key]['mean'], d)} +- {_cell(s[key]['std'], d)}"
+                             for key, label, d in METRICS if key in s) + f"; report {path}")
     # drift has no value where no held-out clip lasts 10 s; a pose error that is not finite is a
     # broken run
     return 0 if all(math.isfinite(s[key]["mean"]) for key in ("angle_all", "pos")) else 1

@@ -74,6 +74,7 @@ def test_a_short_cross_validation_trains_and_scores_every_fold(tmp_path):
     assert sorted(s for r in result["folds"] for s in r["subjects"]) == list(range(1, 7))
     for r in result["folds"]:
         assert np.isfinite([r["angle_all"], r["pos"], r["drift_10s"]]).all(), r
+        assert "travel_ratio" in r   # nan where no held-out window travels 0.5 m
         assert r["clips"] == 4 and r["steps"] == 3
         assert (tmp_path / "runs" / f"fold{r['fold']}" / "checkpoints" / r["checkpoint"]).is_file()
         log = json.loads((tmp_path / "runs" / f"fold{r['fold']}" / "results" / "train_log.json").read_text())
@@ -113,8 +114,8 @@ def test_folds_trained_at_once_score_as_folds_trained_in_turn(tmp_path):
     at_once = cv.run_folds(motions, cfg, 3, tmp_path / "once", progress=lines.append, jobs=3)
     assert [r["subjects"] for r in at_once["folds"]] == [r["subjects"] for r in in_turn["folds"]]
     for a, b in zip(at_once["folds"], in_turn["folds"]):
-        for key in ("angle_all", "pos", "drift_10s"):
-            assert a[key] == pytest.approx(b[key], rel=1e-5), (key, a, b)
+        for key in ("angle_all", "pos", "drift_10s", "travel_ratio"):
+            assert a[key] == pytest.approx(b[key], rel=1e-5, nan_ok=True), (key, a, b)
         assert a["steps"] == b["steps"] == 3
     for n in (1, 2, 3):   # each fold's console went to its own log, its row to row.json
         assert "train:" in (tmp_path / "once" / f"fold{n}" / "console.log").read_text()
@@ -155,6 +156,11 @@ def test_paired_differences_are_taken_fold_by_fold():
     assert d["drift_10s"]["std"] == pytest.approx(np.std([0.05, 0.10, -0.10], ddof=1))
     # the spread between folds (1 deg) is far wider than the paired differences' (0.25 deg)
     assert cv.spread([r["angle_all"] for r in a["folds"]])["std"] > 3 * d["angle_all"]["std"]
+    assert "travel_ratio" not in d   # runs without the travel ratio compare on the rest
+    for r, t in zip(a["folds"] + b["folds"], (0.90, 0.95, 0.97, 0.93, 0.95, 0.96)):
+        r["travel_ratio"] = t
+    assert cv.paired_differences(a, b)["travel_ratio"]["per_fold"] == pytest.approx([-0.03, 0.0, 0.01])
+    assert "| travel, predicted / true | -0.030 | +0.000 | +0.010 |" in cv.compare_report(a, b)
     with pytest.raises(UsageError, match="different folds"):
         cv.paired_differences(a, _result([(1, 1, 1)] * 3, subjects=((1, 3), (2, 4), (5, 6))))
 
