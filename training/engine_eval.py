@@ -22,7 +22,8 @@ Per setting (means over every compared pose of every clip):
   lag            the filter's added latency: the delay d (ms) that best aligns the filtered
                  poses with the raw ones (the mean joint angle between filtered(t) and raw(t - d)
                  is smallest, d within +-0.5 s; sub-frame by a parabola through the best three),
-                 median over clips, with its spread
+                 median over clips, with its spread; for --smoothing waitN (poses stamped with their
+                 own frames, each ready N frames later) that delay plus the N frames
 Root drift (m) over windows of 2 / 5 / 10 s starting every second, | predicted - true root
 displacement | at the window's end, pooled over the windows of all clips: of the pose root the
 engine outputs (drift-corrected) and of the integrated root velocity (the model alone); per clip,
@@ -239,7 +240,10 @@ def summarize(clips, settings) -> dict:
         jit, tjit = pooled("jitter_100m_s3"), pooled("truth_jitter_100m_s3")
         ratios = [c.runs[s].metrics["jitter_100m_s3"] / c.runs[s].metrics["truth_jitter_100m_s3"]
                   for c in clips if (c.runs[s].metrics.get("truth_jitter_100m_s3") or 0) > 0]
-        lags = [filter_lag_ms(c.runs[s].quats, c.runs[RAW].quats, c.fps) for c in clips] if s != RAW else []
+        # a waiting smoother's poses are stamped with their own frames, so they align with the raw
+        # ones; its latency is the frames it waits for
+        lags = [filter_lag_ms(c.runs[s].quats, c.runs[RAW].quats, c.fps) + 1000.0 * wait_frames(s) / c.fps
+                for c in clips] if s != RAW else []
         row = {"poses": poses, "angle": pooled("angle_error_deg"), "pos": pooled("position_error_cm"),
                "jitter": jit, "truth_jitter": tjit, "jitter_ratio": jit / tjit if tjit else math.nan,
                "jitter_ratio_gm": float(np.exp(np.mean(np.log(ratios)))) if ratios else math.nan,
@@ -385,11 +389,20 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
     return clips
 
 
-SMOOTHING = number_type(str, lambda v: _smoothing_ok(v), "HZ or HZ,BETA with HZ >= 0 and BETA >= 0")
+SMOOTHING = number_type(str, lambda v: _smoothing_ok(v),
+                        "HZ or HZ,BETA with HZ >= 0 and BETA >= 0, or waitN (N frames, 1 to 4)")
 HEIGHT = number_type(float, lambda v: 1.0 <= v <= 2.5, "a height from 1 to 2.5 m")
 
 
+def wait_frames(setting: str) -> int:
+    """N of a "waitN" setting (smoothing that waits N frames: each pose is ready N frames after
+    its own frame), else 0."""
+    return int(setting[4:]) if setting.startswith("wait") and setting[4:].isdigit() else 0
+
+
 def _smoothing_ok(v: str) -> bool:
+    if v.startswith("wait"):
+        return 1 <= wait_frames(v) <= 4
     try:
         parts = [float(x) for x in v.split(",")]
     except ValueError:

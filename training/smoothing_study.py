@@ -11,7 +11,8 @@ raw output. A smoother that may wait d frames can average the newest frames on b
 one it outputs: symmetric weights reproduce motion that is linear over the window exactly, so
 it removes noise without lag relative to the frame it is stamped with, at d frames of added
 latency (the pose of frame t is ready at frame t + d). Recording a take or streaming to a
-renderer can afford that; a VR avatar cannot.
+renderer can afford that; a VR avatar cannot. The engine's own version of it is
+`mocap_solver_set_smoothing_delay` (`engine-eval --smoothing waitN` measures it there).
 
 This scores the raw network output and centred binomial windows of half-width d (d = 1:
 1/4, 1/2, 1/4 over three frames) on the same clips, each pose compared with the truth of the

@@ -198,6 +198,8 @@ namespace Mocap.Imu
         [Min(0f)] public float smoothingMinCutoffHz = 2f;
         [Tooltip("How much fast motion bypasses the smoothing (Hz per rad/s of joint speed): higher = less lag on fast moves.")]
         [Min(0f)] public float smoothingBeta = 12f;
+        [Tooltip("Smoothing that waits: each pose averages the frames either side of it and comes this many frames (16.7 ms each) later, in place of the filter above. Less jitter at no accuracy cost, for recording and streaming; 0 for VR (no added latency).")]
+        [Range(0, SolverConfig.MaxSmoothingDelayFrames)] public int smoothingDelayFrames;
 
         [Header("Characters (one sensor set each)")]
         [Tooltip("One entry per performer: each has its own sensor set and drives its own avatar.")]
@@ -269,6 +271,7 @@ namespace Mocap.Imu
                 RequireCalibration = requireCalibration,
                 SmoothingMinCutoffHz = smoothingMinCutoffHz,
                 SmoothingBeta = smoothingBeta,
+                SmoothingDelayFrames = smoothingDelayFrames,
             };
         }
 

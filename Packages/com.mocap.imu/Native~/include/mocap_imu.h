@@ -47,7 +47,7 @@ extern "C" {
 #endif
 
 #define MOCAP_API_VERSION 6
-#define MOCAP_API_VERSION_MINOR 1
+#define MOCAP_API_VERSION_MINOR 2
 /* The most sensors one session (one character) carries: a HiPNUC gateway's limit. A session's
  * own count comes from its config; no array below is filled beyond it. */
 #define MOCAP_MAX_SENSORS 16
@@ -580,6 +580,18 @@ MOCAP_API mocap_status mocap_solver_reset_character(mocap_solver *solver, int32_
  * Any thread; takes effect from the character's next frame. */
 MOCAP_API mocap_status mocap_solver_set_character_height(mocap_solver *solver, int32_t character,
                                                          float height_m);
+/* Largest delay mocap_solver_set_smoothing_delay takes, frames. */
+#define MOCAP_SMOOTHING_DELAY_MAX 4
+/* (API 6.2) Output smoothing that waits: with frames > 0 each character's pose of frame t is the
+ * centred binomial average of its joint rotations over frames t - frames .. t + frames (frames =
+ * 1: 1/4, 1/2, 1/4), emitted once frame t + frames is solved, stamped with frame t's sequence and
+ * time; the one-euro filter (smoothing_min_cutoff_hz) is then not applied. Motion that is steady
+ * over the window passes unchanged, so the noise goes without the lag a filter of the newest
+ * frame has, for `frames` frame periods of latency (pose_emitted_ns - frame_emitted_ns shows
+ * them): for recording and streaming, not for a VR avatar. The window's ends repeat the first
+ * frame after a start or reset and the last frame when a session ends, so every frame still gets
+ * its pose. 0 (the default) turns it off. Before mocap_solver_start; one thread. */
+MOCAP_API mocap_status mocap_solver_set_smoothing_delay(mocap_solver *solver, int32_t frames);
 
 /* Counters and health of a solver. A frame whose inference fails (ONNX Runtime out of memory,
  * a model that cannot run these inputs) keeps the character's previous pose and state and is

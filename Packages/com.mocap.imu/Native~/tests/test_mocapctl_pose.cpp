@@ -184,7 +184,9 @@ TEST_F(MocapctlPose, SmoothingOptionLowersJitterAndRejectsBadValues)
         return m.empty() ? 0.0 : std::stod(m[1]);
     };
     double raw = jitter(" --smoothing 0"), standard = jitter(""), strong = jitter(" --smoothing 0.5,0.5");
+    double waited = jitter(" --smoothing wait1");   // the centred window, one frame later
     EXPECT_GT(raw, 0.0);
+    EXPECT_LT(waited, raw / 1.5) << "raw " << raw << " wait1 " << waited;
     // The default (2 Hz, beta 12) lets fast swings through; on this walk it takes out ~half.
     EXPECT_LT(standard, raw / 1.5) << "raw " << raw << " default " << standard;
     EXPECT_LT(strong, standard) << "default " << standard << " 0.5,0.5 " << strong;
@@ -192,6 +194,11 @@ TEST_F(MocapctlPose, SmoothingOptionLowersJitterAndRejectsBadValues)
         Result r = mocapctl("replay " + capture + " --truth " + truth_csv + " --smoothing " + bad);
         EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
         EXPECT_NE(r.output.find("--smoothing wants"), std::string::npos) << r.output;
+    }
+    for (const char *bad : {"wait0", "wait5", "waitx", "wait"}) {
+        Result r = mocapctl("replay " + capture + " --truth " + truth_csv + " --smoothing " + bad);
+        EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find("--smoothing waitN wants N from 1 to 4"), std::string::npos) << r.output;
     }
 }
 

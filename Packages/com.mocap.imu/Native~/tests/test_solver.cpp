@@ -516,7 +516,7 @@ TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion
               MOCAP_ERR_UNSUPPORTED);
     EXPECT_NE(std::string(mocap_last_error()).find("session counter 15 is not known"), std::string::npos)
         << mocap_last_error();
-    EXPECT_NE(std::string(mocap_last_error()).find("API 6.1"), std::string::npos) << mocap_last_error();
+    EXPECT_NE(std::string(mocap_last_error()).find("API 6.2"), std::string::npos) << mocap_last_error();
     EXPECT_EQ(value, 7u);
     EXPECT_EQ(mocap_session_get_counter(sessions.list[0], -1, &value), MOCAP_ERR_UNSUPPORTED);
     EXPECT_EQ(mocap_solver_get_counter(solver.s, -1, MOCAP_SOLVER_COUNTER_COUNT, &value), MOCAP_ERR_UNSUPPORTED);
@@ -529,9 +529,10 @@ TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion
     EXPECT_EQ(mocap_api_version_minor(), MOCAP_API_VERSION_MINOR);
 }
 
-// The poses of one replay solved with the given solver config (nullptr: defaults).
+// The poses of one replay solved with the given solver config (nullptr: defaults) and smoothing
+// delay.
 std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap, const synth_config &cfg,
-                                     const mocap_solver_config *config)
+                                     const mocap_solver_config *config, int32_t smoothing_delay = 0)
 {
     Sessions sessions;
     sessions.list.push_back(open_replay(cap, cfg));
@@ -539,6 +540,7 @@ std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap,
     std::vector<std::vector<mocap_pose>> poses;
     int32_t ch = -1;
     if (!sessions.list[0] || mocap_solver_open(model, config, &solver.s) != MOCAP_OK ||
+        mocap_solver_set_smoothing_delay(solver.s, smoothing_delay) != MOCAP_OK ||
         mocap_solver_add_character(solver.s, sessions.list[0], &ch) != MOCAP_OK ||
         mocap_solver_start(solver.s) != MOCAP_OK || mocap_session_start(sessions.list[0]) != MOCAP_OK) {
         ADD_FAILURE() << mocap_last_error();
@@ -605,6 +607,137 @@ TEST_F(SolverOnShippedModel, SmoothingRemovesJitterAndCanBeTurnedOff)
     printf("smoothing: mean %.2f deg from the raw output, jerk %.3g -> %.3g m/frame^3\n", angle, jr, js);
     EXPECT_LT(js, jr / 2.0) << "jerk raw " << jr << " smoothed " << js;
     check_poses(smooth, [&] { mocap_model_info i; mocap_model_get_info(model.m, &i); return i; }(), 0);
+}
+
+// Smoothing that waits: each pose is the binomial average of the raw rotations around its frame,
+// stamped with that frame, one frame later; every frame keeps its pose, the last ones too.
+TEST_F(SolverOnShippedModel, SmoothingThatWaitsAveragesAroundEachFrameAndKeepsEveryFrame)
+{
+    std::string cap = test_temp_path("smooth_wait.cap");
+    synth_config cfg = short_capture(22, 5.0, "mixed", cap);
+    mocap_solver_config off;
+    mocap_solver_config_defaults(&off);
+    off.smoothing_min_cutoff_hz = 0.0f;
+    std::vector<mocap_pose> raw = solve_replay(model.m, cap, cfg, &off);
+    mocap_solver_config defaults;   // the one-euro filter's setting is ignored while waiting
+    mocap_solver_config_defaults(&defaults);
+    std::vector<mocap_pose> waited = solve_replay(model.m, cap, cfg, &defaults, 1);
+    ASSERT_GT(raw.size(), 250u);
+    ASSERT_EQ(waited.size(), raw.size());
+    const size_t n = raw.size();
+    auto expected = [&](size_t t, int j, double out[4]) {
+        const double w[3] = {0.25, 0.5, 0.25};
+        double sum[4] = {0, 0, 0, 0};
+        for (int o = -1; o <= 1; ++o) {
+            size_t i = (size_t)std::min<long>(std::max<long>((long)t + o, 0), (long)n - 1);
+            double dot = 0.0;
+            for (int k = 0; k < 4; ++k) dot += (double)raw[i].joint_rotations[j][k] * raw[t].joint_rotations[j][k];
+            for (int k = 0; k < 4; ++k) sum[k] += w[o + 1] * (dot < 0 ? -1.0 : 1.0) * raw[i].joint_rotations[j][k];
+        }
+        double norm = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2] + sum[3] * sum[3]);
+        for (int k = 0; k < 4; ++k) out[k] = sum[k] / norm;
+    };
+    double worst = 0.0;
+    std::vector<double> waits_ms;
+    for (size_t t = 0; t < n; ++t) {
+        ASSERT_EQ(waited[t].frame_sequence, raw[t].frame_sequence) << t;
+        ASSERT_EQ(waited[t].time_s, raw[t].time_s) << t;
+        ASSERT_EQ(waited[t].sequence, (uint64_t)t);
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            double e[4], got[4];
+            expected(t, j, e);
+            for (int k = 0; k < 4; ++k) got[k] = waited[t].joint_rotations[j][k];
+            worst = std::max(worst, quat_angle_deg(e, got));
+        }
+        // the pose of frame t was ready only once frame t + 1 was: its latency holds the wait
+        if (t + 1 < n) {
+            ASSERT_GE(waited[t].pose_emitted_ns, waited[t + 1].frame_emitted_ns) << t;
+            waits_ms.push_back((waited[t].pose_emitted_ns - waited[t].frame_emitted_ns) / 1e6);
+        }
+    }
+    EXPECT_LT(worst, 1e-3) << "deg from the binomial average of the raw rotations";
+    std::sort(waits_ms.begin(), waits_ms.end());
+    const double median_wait = waits_ms[waits_ms.size() / 2];
+    EXPECT_GE(median_wait, 1000.0 / 60.0 - 0.5);
+    double jr = mean_jerk(raw), jw = mean_jerk(waited);
+    printf("smoothing that waits: jerk %.3g -> %.3g m/frame^3, latency median %.1f ms\n", jr, jw, median_wait);
+    EXPECT_LT(jw, jr / 2.0);
+    check_poses(waited, [&] { mocap_model_info i; mocap_model_get_info(model.m, &i); return i; }(), 0);
+}
+
+// While waiting, a frame with NaN holds the pose before it (in frame order, flagged incomplete),
+// and a reset first hands out the frames still waiting.
+TEST(Solver, SmoothingThatWaitsHoldsNonFiniteFramesAndFlushesOnReset)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = test_temp_path("nan_wait.cap");
+    synth_config cfg = short_capture(61, 1.0, "walk", cap);
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));  // never started: only its rate is used
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK);
+    ASSERT_EQ(mocap_solver_set_smoothing_delay(solver.s, 1), MOCAP_OK);
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
+    ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
+    mocap_frame f = calibrated_six_frame();
+    std::vector<mocap_frame> frames(6, f);
+    for (size_t i = 0; i < frames.size(); ++i) {
+        double q[4], axis[3] = {0.3, 1.0, -0.2};
+        quat_from_axis_angle(q, axis, 0.05 * (double)i);   // a slow turn of every sensor
+        for (int s = 0; s < 6; ++s)
+            for (int k = 0; k < 4; ++k) frames[i].sensors[s].bone_orientation[k] = (float)q[k];
+        frames[i].sequence = i;
+        frames[i].time_s = 10.0 + (double)i / 60.0;
+    }
+    frames[2].sensors[3].bone_acceleration[0] = NAN;
+    frames[3].sensors[1].bone_orientation[0] = INFINITY;
+    for (size_t i = 0; i < 5; ++i) {
+        const mocap_frame *fp = &frames[i];
+        ASSERT_EQ(solver_solve(solver.s, &ch, &fp, nullptr, 1), MOCAP_OK) << mocap_last_error();
+    }
+    std::vector<mocap_pose> poses(16);
+    uint32_t n = 0;
+    ASSERT_EQ(mocap_solver_drain(solver.s, 0, poses.data(), (uint32_t)poses.size(), &n), MOCAP_OK);
+    ASSERT_EQ(n, 4u) << "frame 4 waits for frame 5";
+    for (uint32_t i = 0; i < n; ++i) EXPECT_EQ(poses[i].frame_sequence, i);
+    for (int i : {2, 3}) {
+        EXPECT_TRUE(poses[i].flags & MOCAP_POSE_INCOMPLETE) << i;
+        EXPECT_EQ(0, memcmp(poses[i].joint_rotations, poses[1].joint_rotations, sizeof poses[1].joint_rotations));
+    }
+    EXPECT_NE(0, memcmp(poses[1].joint_rotations, poses[0].joint_rotations, sizeof poses[0].joint_rotations));
+    // A reset (a new calibration) hands out frame 4 before the state is cleared; frame 5 then
+    // starts a new window and waits.
+    ASSERT_EQ(mocap_solver_reset_character(solver.s, ch), MOCAP_OK);
+    const mocap_frame *fp = &frames[5];
+    ASSERT_EQ(solver_solve(solver.s, &ch, &fp, nullptr, 1), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_solver_drain(solver.s, 0, poses.data(), (uint32_t)poses.size(), &n), MOCAP_OK);
+    ASSERT_EQ(n, 1u);
+    EXPECT_EQ(poses[0].frame_sequence, 4u);
+    EXPECT_FALSE(poses[0].flags & MOCAP_POSE_INCOMPLETE);
+}
+
+TEST_F(SolverOnShippedModel, SmoothingDelayIsCheckedAndSetBeforeTheStart)
+{
+    Sessions sessions;   // closed after the solver
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK) << mocap_last_error();
+    for (int32_t bad : {-1, MOCAP_SMOOTHING_DELAY_MAX + 1}) {
+        EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, bad), MOCAP_ERR_INVALID_ARGUMENT);
+        EXPECT_NE(std::string(mocap_last_error()).find("smoothing delay"), std::string::npos);
+    }
+    EXPECT_EQ(mocap_solver_set_smoothing_delay(nullptr, 1), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, MOCAP_SMOOTHING_DELAY_MAX), MOCAP_OK);
+    EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, 0), MOCAP_OK);
+    std::string cap = test_temp_path("smooth_delay_state.cap");
+    synth_config cfg = short_capture(23, 1.0, "mixed", cap);
+    sessions.list.push_back(open_replay(cap, cfg));
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK) << mocap_last_error();
+    EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, 1), MOCAP_ERR_STATE);
 }
 
 // Three characters from three replays are solved in batched inference calls.
@@ -1107,7 +1240,7 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
     EXPECT_EQ(mocap_api_version(), 6);        // 6: sensor sets (counts, segments, states)
-    EXPECT_EQ(mocap_api_version_minor(), 1);  // 6.1: performer height (stride scaling)
+    EXPECT_EQ(mocap_api_version_minor(), 2);  // 6.1: performer height; 6.2: smoothing that waits
     // The sensor-set fields a binding mirrors are in the table too.
     const mocap_field_layout *count = find("mocap_frame", "sensor_count");
     ASSERT_NE(count, nullptr);

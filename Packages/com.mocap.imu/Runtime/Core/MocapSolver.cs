@@ -38,6 +38,15 @@ namespace Mocap.Imu
         /// <summary>How much the cut-off rises with joint speed (Hz per rad/s): higher lets fast
         /// motion through with less lag.</summary>
         public float SmoothingBeta { get; set; }
+        /// <summary>Most frames <see cref="SmoothingDelayFrames"/> takes (MOCAP_SMOOTHING_DELAY_MAX).</summary>
+        public const int MaxSmoothingDelayFrames = 4;
+        /// <summary>Smoothing that waits: with N &gt; 0 each pose is the centred average of its
+        /// joint rotations over the N frames before and after it (N = 1: 1/4, 1/2, 1/4), handed
+        /// out N frames later and stamped with its own frame, in place of the one-euro filter. It
+        /// takes out the network's frame-to-frame noise without lag against its own frame, for N
+        /// frames of latency: for recording takes and streaming, not for a VR avatar. 0 (the
+        /// default) keeps the one-euro filter.</summary>
+        public int SmoothingDelayFrames { get; set; }
 
         internal unsafe void ToNative(out NativeSolverConfig native)
         {
@@ -117,6 +126,17 @@ namespace Mocap.Imu
                 throw failure;
             }
             handle.Adopt(solver);
+            var delay = config?.SmoothingDelayFrames ?? 0;
+            if (delay != 0)
+            {
+                status = NativeSolverMethods.mocap_solver_set_smoothing_delay(handle, delay);
+                if (status != MocapStatus.Ok)
+                {
+                    var failure = NativeMethods.Failure(status);
+                    handle.Dispose();
+                    throw failure;
+                }
+            }
             return new MocapSolver(model, handle);
         }
 

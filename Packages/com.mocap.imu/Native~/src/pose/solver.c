@@ -21,6 +21,19 @@
 #define FRAME_BUFFER 16        /* frames taken from a session per drain call */
 #define ABSENT_PERIODS 3       /* no frame for this many periods: not waited for */
 
+/* A solved frame waiting for the frames after it (smoothing that waits). */
+typedef struct waiting_frame {
+    double q[MOCAP_JOINT_COUNT][4];   /* the network's rotations, not smoothed */
+    float vel[3], contact[2];
+    uint64_t sequence;
+    double time_s;
+    int64_t newest_receive_ns, emitted_ns, taken_ns;
+    int fresh;                        /* every model sensor was fresh (else INCOMPLETE) */
+    int held;                         /* non-finite input or output: the pose before repeats */
+} waiting_frame;
+
+#define WAITING_FRAMES (2 * MOCAP_SMOOTHING_DELAY_MAX + 1)
+
 typedef struct character {
     mocap_session *session;
     int replay;                 /* frames are stamped with data time, not the wall clock */
@@ -39,6 +52,10 @@ typedef struct character {
     int64_t last_frame_ns;      /* monotonic time a frame last became pending (0: never) */
     drift_state drift;
     pose_filter_state smoothing;
+    /* Smoothing that waits: the last frames, oldest first; waiting[next_emit] is the next to
+     * become a pose (the ones before it are poses already). */
+    waiting_frame waiting[WAITING_FRAMES];
+    int waiting_count, next_emit;
     uint64_t pose_sequence;
     int have_last_pose;
     mocap_pose last_pose;
@@ -67,6 +84,7 @@ struct mocap_solver {
     skeleton sk;
     drift_params drift;
     pose_filter_params smoothing;
+    int smoothing_delay;        /* frames the centred window waits for (0: the one-euro filter) */
     int L, H;
     int64_t period_ns;
     character *chars[MOCAP_MAX_CHARACTERS];
@@ -199,24 +217,6 @@ static void push_pose(character *ch, const mocap_pose *pose)
     spsc_ring_commit(&ch->poses);
 }
 
-/* NaN/Inf input or output: nothing reaches the model state; the previous pose is repeated for
- * this frame with MOCAP_POSE_INCOMPLETE set (nothing is emitted before the first pose). */
-static void hold_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns)
-{
-    character *ch = s->chars[c];
-    if (!ch->have_last_pose) return;
-    mocap_pose *p = &s->pose;
-    *p = ch->last_pose;
-    p->sequence = ch->pose_sequence++;
-    p->frame_sequence = f->sequence;
-    p->time_s = f->time_s;
-    p->flags = (p->flags & ~(uint32_t)MOCAP_POSE_CORRECTED) | MOCAP_POSE_INCOMPLETE;
-    p->newest_receive_ns = f->newest_receive_ns;
-    p->frame_emitted_ns = f->emitted_ns;
-    p->pose_emitted_ns = pose_stamp(ch, f, taken_ns);
-    push_pose(ch, p);
-}
-
 static uint64_t double_to_bits(double v)
 {
     uint64_t bits;
@@ -231,22 +231,18 @@ static double bits_to_double(uint64_t bits)
     return v;
 }
 
-static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns,
-                       const float *rot, const float *vel, const float *contact)
+/* The pose of frame e with rotations q: forward kinematics, root motion and drift correction
+ * from e's velocity and contacts, e's stamps. */
+static void emit_pose(mocap_solver *s, int32_t c, const waiting_frame *e, double q[][4], int64_t stamp_ns)
 {
     character *ch = s->chars[c];
-    double q[MOCAP_JOINT_COUNT][4];
     double rel[MOCAP_JOINT_COUNT][3];
-    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, q[j]);
-    /* Before forward kinematics, so joint positions and the feet that drift correction pins
-     * are those of the smoothed pose. */
-    pose_filter_step(&ch->smoothing, &s->smoothing, q, MOCAP_JOINT_COUNT);
     const double zero[3] = {0, 0, 0};
     skeleton_fk(&s->sk, (const double (*)[4])q, zero, NULL, rel);
     if (!ch->drift.initialized) drift_reset(&ch->drift, s->sk.offsets[0]);
     const double gain = bits_to_double(mocap_atomic_load_u64(&ch->velocity_gain_bits));
-    double v[3] = {vel[0] * gain, vel[1] * gain, vel[2] * gain};
-    double p[2] = {contact[0], contact[1]};
+    double v[3] = {e->vel[0] * gain, e->vel[1] * gain, e->vel[2] * gain};
+    double p[2] = {e->contact[0], e->contact[1]};
     double feet[2][3];
     memcpy(feet[0], rel[SKELETON_LEFT_FOOT], sizeof feet[0]);
     memcpy(feet[1], rel[SKELETON_RIGHT_FOOT], sizeof feet[1]);
@@ -255,14 +251,14 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
 
     mocap_pose *pose = &s->pose;
     pose->sequence = ch->pose_sequence++;
-    pose->frame_sequence = f->sequence;
-    pose->time_s = f->time_s;
+    pose->frame_sequence = e->sequence;
+    pose->time_s = e->time_s;
     pose->character = (uint32_t)c;
     uint32_t flags = 0;
     if (p[0] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_LEFT;
     if (p[1] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_RIGHT;
     if (corrected) flags |= MOCAP_POSE_CORRECTED;
-    if (!model_sensors_fresh(s, ch, f)) flags |= MOCAP_POSE_INCOMPLETE;
+    if (!e->fresh) flags |= MOCAP_POSE_INCOMPLETE;
     pose->flags = flags;
     for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
         for (int k = 0; k < 4; ++k) pose->joint_rotations[j][k] = (float)q[j][k];
@@ -272,18 +268,150 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
         pose->root_position[k] = (float)root[k];
         pose->root_velocity[k] = (float)v[k];
     }
-    pose->foot_contact[0] = contact[0];
-    pose->foot_contact[1] = contact[1];
-    pose->newest_receive_ns = f->newest_receive_ns;
-    pose->frame_emitted_ns = f->emitted_ns;
-    pose->pose_emitted_ns = pose_stamp(ch, f, taken_ns);
+    pose->foot_contact[0] = e->contact[0];
+    pose->foot_contact[1] = e->contact[1];
+    pose->newest_receive_ns = e->newest_receive_ns;
+    pose->frame_emitted_ns = e->emitted_ns;
+    pose->pose_emitted_ns = stamp_ns;
     ch->last_pose = *pose;
     ch->have_last_pose = 1;
     push_pose(ch, pose);
 }
 
-static void reset_character_state(mocap_solver *s, character *ch)
+/* The pose before repeated for frame e, flagged INCOMPLETE (a held frame). */
+static void emit_held(character *ch, const waiting_frame *e, int64_t stamp_ns, mocap_pose *p)
 {
+    if (!ch->have_last_pose) return;
+    *p = ch->last_pose;
+    p->sequence = ch->pose_sequence++;
+    p->frame_sequence = e->sequence;
+    p->time_s = e->time_s;
+    p->flags = (p->flags & ~(uint32_t)MOCAP_POSE_CORRECTED) | MOCAP_POSE_INCOMPLETE;
+    p->newest_receive_ns = e->newest_receive_ns;
+    p->frame_emitted_ns = e->emitted_ns;
+    p->pose_emitted_ns = stamp_ns;
+    push_pose(ch, p);
+}
+
+static void waiting_frame_of(waiting_frame *e, const mocap_solver *s, const character *ch,
+                             const mocap_frame *f, int64_t taken_ns)
+{
+    e->sequence = f->sequence;
+    e->time_s = f->time_s;
+    e->newest_receive_ns = f->newest_receive_ns;
+    e->emitted_ns = f->emitted_ns;
+    e->taken_ns = taken_ns;
+    e->fresh = model_sensors_fresh(s, ch, f);
+    e->held = 0;
+}
+
+/* Binomial weights of row 2 d (1/4, 1/2, 1/4 for d = 1). */
+static void binomial_weights(int d, double *w)
+{
+    const int n = 2 * d;
+    double c = 1.0;
+    for (int k = 0; k <= n; ++k) {
+        w[k] = c / ldexp(1.0, n);
+        c = c * (double)(n - k) / (double)(k + 1);
+    }
+}
+
+/* Emits the waiting frames whose window is complete, or all of them (flush: the window's far
+ * side repeats the newest frame), in frame order. */
+static void emit_waiting(mocap_solver *s, int32_t c, int flush)
+{
+    character *ch = s->chars[c];
+    const int d = s->smoothing_delay, n = ch->waiting_count;
+    if (n == 0) return;
+    const waiting_frame *newest = &ch->waiting[n - 1];
+    const int64_t now = mocap_monotonic_ns();
+    /* Live: the monotonic clock. A replay: the newest frame's recorded stamp plus the real time
+     * it spent here, so pose - frame counts the frames waited for. */
+    const int64_t stamp = ch->replay ? newest->emitted_ns + (now - newest->taken_ns) : now;
+    double w[WAITING_FRAMES];
+    binomial_weights(d, w);
+    while (ch->next_emit < n && (flush || ch->next_emit <= n - 1 - d)) {
+        const int centre = ch->next_emit++;
+        const waiting_frame *e = &ch->waiting[centre];
+        if (e->held) {
+            emit_held(ch, e, stamp, &s->pose);
+            continue;
+        }
+        double q[MOCAP_JOINT_COUNT][4];
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            double sum[4] = {0, 0, 0, 0};
+            for (int o = -d; o <= d; ++o) {
+                int i = centre + o;
+                i = i < 0 ? 0 : (i > n - 1 ? n - 1 : i);
+                const double *qi = ch->waiting[i].q[j];
+                /* q and -q are one rotation: average on the centre's hemisphere */
+                double dot = 0.0;
+                for (int k = 0; k < 4; ++k) dot += qi[k] * e->q[j][k];
+                const double sign = dot < 0.0 ? -1.0 : 1.0;
+                for (int k = 0; k < 4; ++k) sum[k] += w[o + d] * sign * qi[k];
+            }
+            double norm = sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2] + sum[3] * sum[3]);
+            for (int k = 0; k < 4; ++k) q[j][k] = norm > 0.0 ? sum[k] / norm : e->q[j][k];
+        }
+        emit_pose(s, c, e, q, stamp);
+    }
+    if (flush) ch->waiting_count = ch->next_emit = 0;
+}
+
+/* Adds a solved (or held) frame to the window; the oldest, a pose already, makes room. */
+static void wait_for_neighbours(mocap_solver *s, int32_t c, const waiting_frame *e)
+{
+    character *ch = s->chars[c];
+    if (ch->waiting_count == 2 * s->smoothing_delay + 1) {
+        memmove(&ch->waiting[0], &ch->waiting[1], (size_t)(ch->waiting_count - 1) * sizeof ch->waiting[0]);
+        --ch->waiting_count;
+        --ch->next_emit;
+    }
+    ch->waiting[ch->waiting_count++] = *e;
+    emit_waiting(s, c, 0);
+}
+
+/* NaN/Inf input or output: nothing reaches the model state; the previous pose is repeated for
+ * this frame with MOCAP_POSE_INCOMPLETE set (nothing is emitted before the first pose). */
+static void hold_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns)
+{
+    character *ch = s->chars[c];
+    if (s->smoothing_delay > 0) {
+        if (ch->waiting_count == 0) return;
+        waiting_frame e = ch->waiting[ch->waiting_count - 1];
+        waiting_frame_of(&e, s, ch, f, taken_ns);
+        e.held = 1;
+        wait_for_neighbours(s, c, &e);
+        return;
+    }
+    waiting_frame e;
+    waiting_frame_of(&e, s, ch, f, taken_ns);
+    emit_held(ch, &e, pose_stamp(ch, f, taken_ns), &s->pose);
+}
+
+static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns,
+                       const float *rot, const float *vel, const float *contact)
+{
+    character *ch = s->chars[c];
+    waiting_frame e;
+    waiting_frame_of(&e, s, ch, f, taken_ns);
+    for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, e.q[j]);
+    memcpy(e.vel, vel, sizeof e.vel);
+    memcpy(e.contact, contact, sizeof e.contact);
+    if (s->smoothing_delay > 0) {
+        wait_for_neighbours(s, c, &e);
+        return;
+    }
+    /* Before forward kinematics, so joint positions and the feet that drift correction pins
+     * are those of the smoothed pose. */
+    pose_filter_step(&ch->smoothing, &s->smoothing, e.q, MOCAP_JOINT_COUNT);
+    emit_pose(s, c, &e, e.q, pose_stamp(ch, f, taken_ns));
+}
+
+static void reset_character_state(mocap_solver *s, int32_t c)
+{
+    character *ch = s->chars[c];
+    emit_waiting(s, c, 1);   /* the frames before the reset keep their poses */
     size_t n = (size_t)s->L * (size_t)s->H;
     memset(ch->state_h, 0, n * sizeof(float));
     memset(ch->state_c, 0, n * sizeof(float));
@@ -322,7 +450,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
             return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver_solve: character %d", (int)c);
         character *ch = s->chars[c];
         int64_t taken = taken_ns ? taken_ns[i] : t0;
-        if (mocap_atomic_exchange_int(&ch->reset_requested, 0)) reset_character_state(s, ch);
+        if (mocap_atomic_exchange_int(&ch->reset_requested, 0)) reset_character_state(s, c);
         if (s->config.require_calibration && !required_calibrated(s, ch, frames[i])) {
             mocap_atomic_add_u64(&ch->frames_uncalibrated, 1);
             continue;
@@ -454,6 +582,7 @@ static void solver_main(void *arg)
             pull_frame(s, ch, now);
             if (!ch->pending) {
                 if (ch->session_ended) {
+                    emit_waiting(s, c, 1);   /* the last frames get their poses */
                     mocap_atomic_store_int(&ch->ended, 1); /* every pose was pushed before */
                     continue;
                 }
@@ -780,6 +909,19 @@ mocap_status mocap_solver_set_character_height(mocap_solver *s, int32_t c, float
         gain = pow((double)height_m / (double)training_height, (double)exponent - 1.0);
     }
     mocap_atomic_store_u64(&s->chars[c]->velocity_gain_bits, double_to_bits(gain));
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_set_smoothing_delay(mocap_solver *s, int32_t frames)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver is NULL");
+    if (s->started || s->prepared)
+        return mocap_fail(MOCAP_ERR_STATE, "the smoothing delay is set before mocap_solver_start");
+    if (frames < 0 || frames > MOCAP_SMOOTHING_DELAY_MAX)
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "smoothing delay %d frames is outside 0..%d "
+                          "(0: the one-euro filter of the newest frame)", (int)frames,
+                          MOCAP_SMOOTHING_DELAY_MAX);
+    s->smoothing_delay = frames;
     return MOCAP_OK;
 }
 

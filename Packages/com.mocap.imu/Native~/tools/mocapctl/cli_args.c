@@ -217,11 +217,35 @@ int apply_height(mocap_solver *solver, int32_t character, float height_m)
     return 1;
 }
 
+/* "waitN": N frames of smoothing that waits (1..MOCAP_SMOOTHING_DELAY_MAX); 0 for any other
+ * form, -1 for "wait" with a bad N. */
+static int32_t smoothing_wait_frames(const char *v)
+{
+    if (strncmp(v, "wait", 4) != 0) return 0;
+    char *end = NULL;
+    long n = strtol(v + 4, &end, 10);
+    return (end == v + 4 || *end != '\0' || n < 1 || n > MOCAP_SMOOTHING_DELAY_MAX) ? -1 : (int32_t)n;
+}
+
+int32_t cli_smoothing_delay(int argc, char **argv)
+{
+    const char *smoothing = cli_value(argc, argv, "--smoothing");
+    int32_t n = smoothing ? smoothing_wait_frames(smoothing) : 0;
+    return n > 0 ? n : 0;
+}
+
 int cli_smoothing(int argc, char **argv, mocap_solver_config *out)
 {
     mocap_solver_config_defaults(out);
     const char *smoothing = cli_value(argc, argv, "--smoothing");
     if (!smoothing) return 0;
+    const int32_t wait = smoothing_wait_frames(smoothing);
+    if (wait > 0) return 0;   /* the solver's delay (cli_smoothing_delay); no one-euro filter */
+    if (wait < 0) {
+        fprintf(stderr, "mocapctl: --smoothing waitN wants N from 1 to %d frames, got '%s'\n",
+                MOCAP_SMOOTHING_DELAY_MAX, smoothing);
+        return 2;
+    }
     char *end = NULL;
     double hz = strtod(smoothing, &end), beta = out->smoothing_beta;
     int bad = end == smoothing;
@@ -232,7 +256,7 @@ int cli_smoothing(int argc, char **argv, mocap_solver_config *out)
     }
     if (bad || *end != '\0' || !(hz >= 0.0 && hz < 1e6) || !(beta >= 0.0 && beta < 1e6)) {
         fprintf(stderr, "mocapctl: --smoothing wants HZ or HZ,BETA with HZ >= 0 (0: off) and "
-                        "BETA >= 0, got '%s'\n", smoothing);
+                        "BETA >= 0, or waitN, got '%s'\n", smoothing);
         return 2;
     }
     out->smoothing_min_cutoff_hz = (float)hz;

@@ -43,8 +43,11 @@ void cli_refuse_overwriting(const char *input, const char *input_what, int argc,
 
 /* The solver options of the pose commands: defaults, then --smoothing HZ[,BETA] (the one-euro
  * output filter's cut-off at rest, Hz, and its rise per rad/s of joint speed; 0 = the model's
- * raw output). 0, or 2 (a usage error, printed). */
+ * raw output) or --smoothing waitN (smoothing that waits N frames: cli_smoothing_delay). 0, or 2
+ * (a usage error, printed). */
 int cli_smoothing(int argc, char **argv, mocap_solver_config *out);
+/* N of a valid --smoothing waitN (for mocap_solver_set_smoothing_delay), else 0. */
+int32_t cli_smoothing_delay(int argc, char **argv);
 /* --height M (the performer's standing height, metres): *out = M, or 0 when absent; 2 (and a
  * message) when M is not a number in MOCAP_HEIGHT_MIN_M..MOCAP_HEIGHT_MAX_M, else 0. */
 int cli_height(int argc, char **argv, float *out);

@@ -174,6 +174,7 @@ int cmd_replay_pose(int argc, char **argv)
     if (replay_session_open(capture, &cfg, prelude, cal_path, &session) != 0) goto done;
     int32_t character = -1;
     s = mocap_solver_open(model, &solver_config, &solver);
+    if (s == MOCAP_OK) s = mocap_solver_set_smoothing_delay(solver, cli_smoothing_delay(argc, argv));
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &character);
     if (s == MOCAP_OK && apply_height(solver, character, height) != 0) goto done;
     if (s == MOCAP_OK) s = mocap_solver_start(solver);

@@ -120,6 +120,7 @@ int cmd_stream(int argc, char **argv)
         }
     }
     s = mocap_solver_open(model, &solver_config, &solver);
+    if (s == MOCAP_OK) s = mocap_solver_set_smoothing_delay(solver, cli_smoothing_delay(argc, argv));
     for (int i = 0; s == MOCAP_OK && i < characters; ++i)
         s = mocap_solver_add_character(solver, sessions[i], &ids[i]);
     for (int i = 0; s == MOCAP_OK && i < characters; ++i)

@@ -54,7 +54,7 @@ static const mocapctl_command COMMANDS[] = {
      "                      [--sensors LIST]\n"
      "       mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
      "                      [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
-     "                      [--metrics-json ACCURACY.json] [--smoothing HZ[,BETA]] [--height M]\n"
+     "                      [--metrics-json ACCURACY.json] [--smoothing HZ[,BETA]|waitN] [--height M]\n"
      "                      [--sensors LIST]\n"
      "The first form: decode -> filter -> calibrate, a summary per sensor and, with synth's truth,\n"
      "the bone orientation error. The second runs the pose model too (decode -> filter ->\n"
@@ -74,21 +74,23 @@ static const mocapctl_command COMMANDS[] = {
      "  --pose-csv POSES.csv one CSV line per pose\n"
      "  --metrics-json ACCURACY.json  with a pose truth: the accuracy figures as JSON\n"
      "  --smoothing HZ[,BETA]  the output filter's cut-off at rest and its rise per rad/s\n"
-     "                       (default 2,12; 0 = the model's raw output)\n"
+     "                       (default 2,12; 0 = the model's raw output); waitN: the centred\n"
+     "                       average of N frames either side, each pose N frames later\n"
      HEIGHT_HELP
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
      cmd_replay},
     {"live", MOCAPCTL_LIVE_OPTIONS, "guided calibration on real sensors, then live status or poses",
      "usage: mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
-     "                    [--smoothing HZ[,BETA]] [--height M] [--sensors LIST]\n"
+     "                    [--smoothing HZ[,BETA]|waitN] [--height M] [--sensors LIST]\n"
      "The heading and T-pose steps with a countdown, then a status line until Ctrl-C.\n"
      "  --port DEV           the receiver's serial port\n"
      "  --baud B             its baud rate\n"
      "  --record CAPTURE     keep every byte in a capture file\n"
      "  --seconds S          stop after S seconds\n"
      "  --model M, --pose    run the pose model (--pose: the shipped one) and show pose status\n"
-     "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off)\n"
+     "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off); waitN: the centred\n"
+     "                       average of N frames either side, each pose N frames later\n"
      HEIGHT_HELP
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
@@ -104,7 +106,7 @@ static const mocapctl_command COMMANDS[] = {
     {"stream", MOCAPCTL_STREAM_OPTIONS, "solved poses to VMC receivers (OSC over UDP)",
      "usage: mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...]\n"
      "                      [--speed X | --fast] [--prelude H,S,T] | --port DEV [--baud B]) [--model M]\n"
-     "                      [--rate HZ] [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]]\n"
+     "                      [--rate HZ] [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]|waitN]\n"
      "                      [--height M] [--sensors LIST]\n"
      "Character i (the i-th --replay, or the one --port) goes to the i-th --vmc.\n"
      "  --vmc HOST:PORT      a receiver (VSeeFace, EVMC4U, VMC4B listen on 39539)\n"
@@ -118,7 +120,8 @@ static const mocapctl_command COMMANDS[] = {
      "  --rate HZ            at most this many bundles per second (default 60)\n"
      "  --seconds S          stop after S seconds\n"
      "  --allow-remote       allow destinations that are not this machine\n"
-     "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off)\n"
+     "  --smoothing HZ[,BETA]  the output filter (default 2,12; 0 = off); waitN: the centred\n"
+     "                       average of N frames either side, each pose N frames later\n"
      HEIGHT_HELP
      SENSOR_SET_HELP
      "                       the sensors the model does not require are optional\n",

@@ -73,6 +73,9 @@ namespace Mocap.Imu
                                                                              int character, float heightM);
 
         [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_solver_set_smoothing_delay(SolverHandle solver, int frames);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_solver_get_stats(SolverHandle solver, int character,
                                                                   MocapSolverStats* stats);
 

@@ -545,6 +545,36 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void SmoothingThatWaitsReachesTheEngine()
+        {
+            // each pose the centred 1/4, 1/2, 1/4 average of the raw rotations around its frame,
+            // stamped with its frame, one frame later; every frame keeps its pose
+            Assert.AreEqual(0, new SolverConfig().SmoothingDelayFrames);
+            var raw = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingMinCutoffHz = 0f });
+            var waited = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingDelayFrames = 1 });
+            Assert.AreEqual(raw.Count, waited.Count);
+            Assert.Greater(raw.Count, 10);
+            for (int i = 1; i + 1 < raw.Count; i++)
+            {
+                Assert.AreEqual(raw[i].FrameSequence, waited[i].FrameSequence);
+                for (int j = 0; j < MocapPose.JointCount; j += 5)
+                {
+                    Quat before = raw[i - 1].GetJointRotation(j), at = raw[i].GetJointRotation(j),
+                         after = raw[i + 1].GetJointRotation(j);
+                    Quat Near(Quat q) => Quat.Dot(q, at) < 0 ? new Quat(-q.X, -q.Y, -q.Z, -q.W) : q;
+                    Quat b = Near(before), a = Near(after);
+                    var mean = new Quat(0.25f * b.X + 0.5f * at.X + 0.25f * a.X, 0.25f * b.Y + 0.5f * at.Y + 0.25f * a.Y,
+                                        0.25f * b.Z + 0.5f * at.Z + 0.25f * a.Z, 0.25f * b.W + 0.5f * at.W + 0.25f * a.W).Normalized;
+                    Assert.Less(Quat.Angle(mean, waited[i].GetJointRotation(j)), 2e-4, $"pose {i} joint {j} (radians)");
+                }
+            }
+            var e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model,
+                new SolverConfig { SmoothingDelayFrames = SolverConfig.MaxSmoothingDelayFrames + 1 }));
+            Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
+            StringAssert.Contains("smoothing delay", e.Message);
+        }
+
+        [Test]
         public void DisposingSessionAndModelBeforeTheSolverIsSafe()
         {
             // The wrong order on purpose: the solver's handle references the session and model
