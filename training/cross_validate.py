@@ -56,6 +56,11 @@ def _cell(value, digits: int) -> str:
     return "-" if value is None or not math.isfinite(float(value)) else f"{float(value):.{digits}f}"
 
 
+def _fold_line(row) -> str:
+    """A scored fold's console line."""
+    return f"cv: fold {row['fold']}: " + "  ".join(f"{label} {_cell(row.get(key), d)}" for key, label, d in METRICS)
+
+
 def _summary(rows) -> dict:
     """Mean and spread per metric over the folds (metrics that every row has)."""
     return {key: spread([r[key] for r in rows]) for key, _, _ in METRICS if all(key in r for r in rows)}
@@ -141,7 +146,7 @@ def score_fold(i: int, folds, motions, cfg, runs_dir: Path, eval_max_seconds=Non
     tmp = fold_dir / "row.json.tmp"
     tmp.write_text(json.dumps(row, indent=1))
     os.replace(tmp, fold_dir / "row.json")
-    progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {_cell(row.get(key), d)}" for key, label, d in METRICS))
+    progress(_fold_line(row))
     return row
 
 
@@ -203,7 +208,7 @@ def run_folds(motions, cfg, k: int, runs_dir: Path, eval_max_seconds=None, progr
                 progress(f"cv: fold {i + 1} FAILED (exit {proc.exitcode}); see its console.log")
                 continue
             row = json.loads(row_path.read_text())
-            progress(f"cv: fold {i + 1}: " + "  ".join(f"{label} {_cell(row.get(key), d)}" for key, label, d in METRICS))
+            progress(_fold_line(row))
     if failed:
         tails = []
         for n in sorted(failed):

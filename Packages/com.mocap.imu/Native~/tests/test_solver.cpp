@@ -665,6 +665,20 @@ TEST_F(SolverOnShippedModel, SmoothingThatWaitsAveragesAroundEachFrameAndKeepsEv
     check_poses(waited, [&] { mocap_model_info i; mocap_model_get_info(model.m, &i); return i; }(), 0);
 }
 
+// A solver of the shipped model ticked by hand (solver_prepare + solver_solve, no thread), with
+// one character on a replay session that is never started (only its frame rate is used).
+void prepare_tick_solver(mocap_model *model, Sessions &sessions, Solver &solver, int32_t *ch,
+                         const char *capture_name, int seed, int32_t smoothing_delay = 0)
+{
+    std::string cap = test_temp_path(capture_name);
+    synth_config cfg = short_capture(seed, 1.0, "walk", cap);
+    sessions.list.push_back(open_replay(cap, cfg));
+    ASSERT_EQ(mocap_solver_open(model, nullptr, &solver.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_solver_set_smoothing_delay(solver.s, smoothing_delay), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list.back(), ch), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
+}
+
 // While waiting, a frame with NaN holds the pose before it (in frame order, flagged incomplete),
 // and a reset first hands out the frames still waiting.
 TEST(Solver, SmoothingThatWaitsHoldsNonFiniteFramesAndFlushesOnReset)
@@ -672,16 +686,10 @@ TEST(Solver, SmoothingThatWaitsHoldsNonFiniteFramesAndFlushesOnReset)
     REQUIRE_ORT();
     Model model;
     ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
-    std::string cap = test_temp_path("nan_wait.cap");
-    synth_config cfg = short_capture(61, 1.0, "walk", cap);
     Sessions sessions;
-    sessions.list.push_back(open_replay(cap, cfg));  // never started: only its rate is used
     Solver solver;
-    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK);
-    ASSERT_EQ(mocap_solver_set_smoothing_delay(solver.s, 1), MOCAP_OK);
     int32_t ch = -1;
-    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
-    ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_NO_FATAL_FAILURE(prepare_tick_solver(model.m, sessions, solver, &ch, "nan_wait.cap", 61, 1));
     mocap_frame f = calibrated_six_frame();
     std::vector<mocap_frame> frames(6, f);
     for (size_t i = 0; i < frames.size(); ++i) {
@@ -1111,15 +1119,10 @@ TEST(Solver, NonFiniteInputFramesAreNotFed)
     REQUIRE_ORT();
     Model model;
     ASSERT_EQ(open_model(kShippedModel, &model.m), MOCAP_OK) << mocap_last_error();
-    std::string cap = test_temp_path("nan.cap");
-    synth_config cfg = short_capture(60, 1.0, "walk", cap);
     Sessions sessions;
-    sessions.list.push_back(open_replay(cap, cfg));  // never started: only its rate is used
     Solver solver;
-    ASSERT_EQ(mocap_solver_open(model.m, nullptr, &solver.s), MOCAP_OK);
     int32_t ch = -1;
-    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
-    ASSERT_EQ(solver_prepare(solver.s), MOCAP_OK) << mocap_last_error();
+    ASSERT_NO_FATAL_FAILURE(prepare_tick_solver(model.m, sessions, solver, &ch, "nan.cap", 60));
 
     std::vector<mocap_frame> frames(6, f);
     frames[2].sensors[3].bone_acceleration[0] = NAN;

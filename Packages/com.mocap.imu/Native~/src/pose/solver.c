@@ -85,6 +85,7 @@ struct mocap_solver {
     drift_params drift;
     pose_filter_params smoothing;
     int smoothing_delay;        /* frames the centred window waits for (0: the one-euro filter) */
+    double smoothing_weights[WAITING_FRAMES]; /* its binomial weights */
     int L, H;
     int64_t period_ns;
     character *chars[MOCAP_MAX_CHARACTERS];
@@ -328,8 +329,7 @@ static void emit_waiting(mocap_solver *s, int32_t c, int flush)
     /* Live: the monotonic clock. A replay: the newest frame's recorded stamp plus the real time
      * it spent here, so pose - frame counts the frames waited for. */
     const int64_t stamp = ch->replay ? newest->emitted_ns + (now - newest->taken_ns) : now;
-    double w[WAITING_FRAMES];
-    binomial_weights(d, w);
+    const double *w = s->smoothing_weights;
     while (ch->next_emit < n && (flush || ch->next_emit <= n - 1 - d)) {
         const int centre = ch->next_emit++;
         const waiting_frame *e = &ch->waiting[centre];
@@ -922,6 +922,7 @@ mocap_status mocap_solver_set_smoothing_delay(mocap_solver *s, int32_t frames)
                           "(0: the one-euro filter of the newest frame)", (int)frames,
                           MOCAP_SMOOTHING_DELAY_MAX);
     s->smoothing_delay = frames;
+    binomial_weights(frames, s->smoothing_weights);
     return MOCAP_OK;
 }
 
