@@ -2,14 +2,16 @@
 
     python3 -m training engine-eval [--split val | --split test | --bvh DIR | --procedural]
         [--clips 40] [--clip-seconds 40] [--model M.onnx] [--sensors A,B,...]
-        [--smoothing HZ,BETA ...] [--body-scale S] [--height M] [--seed 0] [--out FILE] [--keep DIR]
+        [--smoothing HZ,BETA[+pinV] ...] [--body-scale S] [--height M] [--seed 0] [--out FILE]
+        [--keep DIR]
 
 For each clip (the first --clip-seconds of evenly spaced clips at least MIN_CLIP_S long, enough
 for the 10 s drift windows) synth_capture writes a byte-level capture (calibration prelude,
 realistic noise, random mountings and headings; --sensors: the capture's sensor set, default the
 model's), and `mocapctl replay --model M --truth --pose-csv --metrics-json` runs it through
 decode -> filter -> calibrate -> model -> output filter -> drift correction: once with the raw
-model output (--smoothing 0) and once per output filter setting (default: the engine's own).
+model output (--smoothing 0) and once per output filter setting (default: the engine's own); a
+setting ending in +pinV also holds planted feet (mocapctl replay --foot-pin V, m/s).
 --body-scale S synthesises every clip on a body S times the size (skeleton and root path);
 --height M gives the engine the performer's height, whose root then moves in the size of the
 model's skeleton and is read back in the performer's metres (x M / the model's training height).
@@ -28,7 +30,10 @@ Root drift (m) over windows of 2 / 5 / 10 s starting every second, | predicted -
 displacement | at the window's end, pooled over the windows of all clips: of the pose root the
 engine outputs (drift-corrected) and of the integrated root velocity (the model alone); per clip,
 whether the correction helped at 10 s. Foot contacts: precision and recall of the engine's
-planted flags against the truth's (a foot slower than synthesis.CONTACT_SPEED).
+planted flags against the truth's (a foot slower than synthesis.CONTACT_SPEED). Foot slide: the
+mean horizontal speed (cm/s) of the engine's feet (forward kinematics of its poses on the
+model's skeleton, from its root) in the frames where it says they are planted (now and in the
+frame before), beside the motion capture's own under its planted labels.
 Writes OUT (default training/results/engine.md; training/results/test/engine.md for --split
 test): the tables, the per-clip figures and the command that made it.
 """
@@ -139,6 +144,8 @@ class ClipResult:
     runs: dict = field(default_factory=dict)   # smoothing -> Replay
     truth_root: np.ndarray | None = None       # (N,3)
     truth_contact: np.ndarray | None = None    # (N,2) bool
+    truth_slide: np.ndarray | None = None      # foot_slide of the motion capture, m/s
+    slide: dict = field(default_factory=dict)  # setting -> foot_slide of its replay, m/s
     fps: float = 60.0
     # metres of the performer per metre of the engine's root: with --height the engine moves the
     # root in its skeleton's size, the performer's height / the model's training height
@@ -147,8 +154,12 @@ class ClipResult:
     @classmethod
     def from_truth(cls, name: str, seconds: float, truth: dict) -> "ClipResult":
         """A clip with no replay yet, its truth's root and planted feet."""
-        return cls(name, seconds, fps=float(truth["fps"]),
-                   truth_root=np.asarray(truth["root_pos"], np.float64), truth_contact=truth_contacts(truth))
+        contact = truth_contacts(truth)
+        _, pos = sk.forward_kinematics(np.asarray(truth["local_rot"], np.float64),
+                                       np.asarray(truth["root_pos"], np.float64),
+                                       np.asarray(truth["offsets"], np.float64))
+        return cls(name, seconds, fps=float(truth["fps"]), truth_root=np.asarray(truth["root_pos"], np.float64),
+                   truth_contact=contact, truth_slide=foot_slide(pos, contact, float(truth["fps"])))
 
 
 def read_replay(poses_csv: Path, metrics_json: Path, truth: dict) -> Replay:
@@ -172,6 +183,25 @@ def read_replay(poses_csv: Path, metrics_json: Path, truth: dict) -> Replay:
                   a[:, [col["vel_x"], col["vel_y"], col["vel_z"]]],
                   np.stack([(flags & POSE_CONTACT_LEFT) != 0, (flags & POSE_CONTACT_RIGHT) != 0], -1),
                   np.clip(np.round(x).astype(int), 0, n - 1))
+
+
+FEET = (10, 11)              # left_foot, right_foot: the joints whose contact the model predicts
+
+
+def foot_slide(positions, planted, fps: float) -> np.ndarray:
+    """Horizontal speeds (m/s) of the feet (positions (P,24,3), planted (P,2) bool) over the
+    frame pairs where a foot is planted in both."""
+    feet = np.asarray(positions, np.float64)[:, FEET][:, :, [0, 2]]
+    speed = np.linalg.norm(np.diff(feet, axis=0), axis=-1) * fps
+    both = planted[1:] & planted[:-1]
+    return speed[both]
+
+
+def replay_slide(r: "Replay", truth: dict, fps: float) -> np.ndarray:
+    """foot_slide of a replay's poses: its rotations on the truth's (the model's) skeleton, from
+    the engine's root."""
+    _, pos = sk.forward_kinematics(sk.rot_from_quat(r.quats), r.root, np.asarray(truth["offsets"], np.float64))
+    return foot_slide(pos, r.contact, fps)
 
 
 def truth_contacts(truth: dict) -> np.ndarray:
@@ -205,13 +235,16 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
     for s in (RAW, *[x for x in settings if x != RAW]):
         tag = "raw" if s == RAW else s.replace(",", "_")
         poses, metrics = cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json")
-        cmd = replay_command(mocapctl, cap, cap.with_suffix(".truth.csv"), model, poses, metrics,
-                             sensors) + ["--smoothing", s] + (["--height", f"{height:g}"] if height else [])
+        smoothing, pin = split_setting(s)
+        cmd = (replay_command(mocapctl, cap, cap.with_suffix(".truth.csv"), model, poses, metrics, sensors)
+               + ["--smoothing", smoothing] + (["--foot-pin", f"{pin:g}"] if pin else [])
+               + (["--height", f"{height:g}"] if height else []))
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise CommandError(f"mocapctl replay {cap.name} --smoothing {s} failed (status "
                                f"{r.returncode}): " + (r.stderr.strip() or r.stdout.strip()[-500:]))
         out.runs[s] = read_replay(poses, metrics, truth)
+        out.slide[s] = replay_slide(out.runs[s], truth, out.fps)
     return out
 
 
@@ -242,7 +275,7 @@ def summarize(clips, settings) -> dict:
                   for c in clips if (c.runs[s].metrics.get("truth_jitter_100m_s3") or 0) > 0]
         # a waiting smoother's poses are stamped with their own frames, so they align with the raw
         # ones; its latency is the frames it waits for
-        lags = [filter_lag_ms(c.runs[s].quats, c.runs[RAW].quats, c.fps) + 1000.0 * wait_frames(s) / c.fps
+        lags = [filter_lag_ms(c.runs[s].quats, c.runs[RAW].quats, c.fps) + 1000.0 * wait_frames(split_setting(s)[0]) / c.fps
                 for c in clips] if s != RAW else []
         row = {"poses": poses, "angle": pooled("angle_error_deg"), "pos": pooled("position_error_cm"),
                "jitter": jit, "truth_jitter": tjit, "jitter_ratio": jit / tjit if tjit else math.nan,
@@ -265,6 +298,10 @@ def summarize(clips, settings) -> dict:
             r = c.runs[s]
             t, p, n = contact_quality(r.contact, c.truth_contact[r.truth_index])
             tp, pp, tt = tp + t, pp + p, tt + n
+        slide = np.concatenate([c.slide[s] for c in clips if s in c.slide] or [np.zeros(0)])
+        truth_slide = np.concatenate([c.truth_slide for c in clips if c.truth_slide is not None] or [np.zeros(0)])
+        row["foot_slide_cm_s"] = 100.0 * float(np.mean(slide)) if len(slide) else math.nan
+        row["truth_foot_slide_cm_s"] = 100.0 * float(np.mean(truth_slide)) if len(truth_slide) else math.nan
         row["contact_precision"] = tp / pp if pp else math.nan
         row["contact_recall"] = tp / tt if tt else math.nan
         out[s] = row
@@ -281,6 +318,9 @@ def _fmt(v, digits=2) -> str:
 def _label(s: str) -> str:
     if s == RAW:
         return "raw model output (--smoothing 0)"
+    smoothing, pin = split_setting(s)
+    if pin:
+        return f"--smoothing {smoothing} --foot-pin {pin:g}"
     return f"--smoothing {s}" + (" (the engine's default)" if s == ENGINE_SMOOTHING else "")
 
 
@@ -311,8 +351,9 @@ def write_report(path: Path, clips, settings, meta: dict, summary: dict) -> Path
     lines += ["", f"The motion capture's own jitter on the same frames: {_fmt(raw['truth_jitter'])} x10^2 m/s^3.",
               "", "## Root drift", "",
               "| output | drift 2 s (m) | drift 5 s | drift 10 s | the model alone (integrated velocity) 2 / 5 / 10 s "
-              "| correction helped at 10 s (clips) | mean change at 10 s per clip (m) | contacts: precision / recall |",
-              "|---|---|---|---|---|---|---|---|"]
+              "| correction helped at 10 s (clips) | mean change at 10 s per clip (m) | contacts: precision / recall "
+              "| planted feet slide (cm/s) |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for s, v in summary.items():
         ch = v["drift_change_per_clip"]
         lines.append(f"| {_label(s)} | {_fmt(v['drift_2s'], 3)} | {_fmt(v['drift_5s'], 3)} | "
@@ -320,10 +361,13 @@ def write_report(path: Path, clips, settings, meta: dict, summary: dict) -> Path
                      f"{_fmt(v['drift_5s_model'], 3)} / {_fmt(v['drift_10s_model'], 3)} | "
                      f"{sum(1 for x in ch if x < 0)} of {len(ch)} | "
                      f"{'%+.3f' % float(np.mean(ch)) if ch else '-'} | "
-                     f"{_fmt(v['contact_precision'])} / {_fmt(v['contact_recall'])} |")
+                     f"{_fmt(v['contact_precision'])} / {_fmt(v['contact_recall'])} | "
+                     f"{_fmt(v['foot_slide_cm_s'], 1)} |")
     first = next(iter(summary.values()))
     lines += ["", f"Windows: {first['drift_2s_windows']} / {first['drift_5s_windows']} / "
-              f"{first['drift_10s_windows']} of 2 / 5 / 10 s.", ""]
+              f"{first['drift_10s_windows']} of 2 / 5 / 10 s. The motion capture's own planted feet "
+              f"slide {_fmt(first['truth_foot_slide_cm_s'], 1)} cm/s (its contact labels include the "
+              "roll from heel to toe).", ""]
     lines += findings(summary, settings)
     lines += ["", "## Per clip (" + _label(settings[0] if settings else RAW) + ")", "",
               "| clip | seconds | angle (deg) | position (cm) | jitter x truth | drift 10 s (m): engine / model alone |",
@@ -353,6 +397,10 @@ def findings(summary, settings) -> list:
                    f"{_fmt(raw['jitter_ratio'])} x), angle error {v['angle'] - raw['angle']:+.3f} deg and "
                    f"position {v['pos'] - raw['pos']:+.3f} cm against the raw output, "
                    f"{_fmt(v['lag_ms'], 0)} ms added latency (median).")
+        if split_setting(s)[1]:
+            out.append(f"- {_label(s)}: planted feet slide {_fmt(v['foot_slide_cm_s'], 1)} cm/s (raw output "
+                       f"{_fmt(raw['foot_slide_cm_s'], 1)}, the motion capture's own "
+                       f"{_fmt(raw['truth_foot_slide_cm_s'], 1)}).")
         ch = v["drift_change_per_clip"]
         out.append(f"- Drift correction ({_label(s)}): 10 s drift {_fmt(v['drift_10s'], 3)} m against "
                    f"{_fmt(v['drift_10s_model'], 3)} m for the model's velocity alone; it helped "
@@ -390,7 +438,15 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
 
 
 SMOOTHING = number_type(str, lambda v: _smoothing_ok(v),
-                        "HZ or HZ,BETA with HZ >= 0 and BETA >= 0, or waitN (N frames, 1 to 4)")
+                        "HZ or HZ,BETA with HZ >= 0 and BETA >= 0, or waitN (N frames, 1 to 4), "
+                        "either followed by +pinV (foot pinning, V m/s from 0 to 1)")
+PIN_TAG = "+pin"
+
+
+def split_setting(setting: str) -> tuple:
+    """(the --smoothing part, the --foot-pin speed or 0.0) of an output setting "S[+pinV]"."""
+    smoothing, tag, pin = setting.partition(PIN_TAG)
+    return smoothing, (float(pin) if tag else 0.0)
 HEIGHT = number_type(float, lambda v: 1.0 <= v <= 2.5, "a height from 1 to 2.5 m")
 
 
@@ -401,6 +457,13 @@ def wait_frames(setting: str) -> int:
 
 
 def _smoothing_ok(v: str) -> bool:
+    v, tag, pin = v.partition(PIN_TAG)
+    if tag:
+        try:
+            if not 0.0 < float(pin) <= 1.0:
+                return False
+        except ValueError:
+            return False
     if v.startswith("wait"):
         return 1 <= wait_frames(v) <= 4
     try:
@@ -419,7 +482,8 @@ def add_arguments(p=None):
     p.add_argument("--model", default=str(DEFAULT_MODEL), help="the ONNX model (default: the engine's)")
     p.add_argument("--sensors", default=None, help="the capture's sensors (default: the model's)")
     p.add_argument("--smoothing", nargs="+", type=SMOOTHING, default=[ENGINE_SMOOTHING],
-                   help=f"output filter settings beside the raw output (default {ENGINE_SMOOTHING}, the engine's)")
+                   help=f"output filter settings beside the raw output (default {ENGINE_SMOOTHING}, the engine's); "
+                        "+pinV after one also pins planted feet (--foot-pin V)")
     p.add_argument("--body-scale", dest="body_scale", type=BODY_SCALE, default=1.0,
                    help="every clip on a body this many times the size (0.5-2; default 1)")
     p.add_argument("--height", type=HEIGHT, default=0.0,

@@ -186,3 +186,41 @@ def test_smoothing_that_waits_runs_through_mocapctl(tmp_path):
     assert s["wait1"]["lag_ms"] == pytest.approx(1000.0 / 60.0, abs=1.0)
     assert s["wait1"]["jitter"] < 0.6 * s["0"]["jitter"]
     assert s["wait1"]["angle"] < s["0"]["angle"] + 0.05
+
+
+def test_foot_slide_counts_only_frame_pairs_where_the_foot_stays_planted():
+    pos = np.zeros((10, 24, 3))
+    pos[:, 10, 0] = 0.01 * np.arange(10)          # the left foot moves 1 cm a frame
+    pos[:, 11, 1] = 0.02 * np.arange(10)          # the right one only rises
+    planted = np.zeros((10, 2), bool)
+    planted[:5, 0] = True                         # left planted in frames 0-4: 4 pairs
+    planted[3:, 1] = True                         # right planted in 3-9: 6 pairs
+    speeds = ee.foot_slide(pos, planted, 60.0)
+    assert len(speeds) == 10
+    assert sorted(speeds.round(9).tolist()) == [0.0] * 6 + [0.6] * 4   # vertical motion is not slide
+
+
+def test_pin_settings_are_read_and_checked():
+    assert ee.split_setting("2,12+pin0.06") == ("2,12", 0.06)
+    assert ee.split_setting("wait1") == ("wait1", 0.0)
+    for good in ("2,12+pin0.06", "wait1+pin0.1", "0+pin1"):
+        assert ee._smoothing_ok(good), good
+    for bad in ("2,12+pin0", "2,12+pin1.5", "2,12+pinx", "+pin0.06", "wait0+pin0.06"):
+        assert not ee._smoothing_ok(bad), bad
+    assert ee._label("2,12+pin0.06") == "--smoothing 2,12 --foot-pin 0.06"
+
+
+@needs_ort
+def test_foot_pinning_runs_through_mocapctl_and_slows_planted_feet(tmp_path):
+    out = tmp_path / "engine.md"
+    assert ee.main(["--procedural", "--clips", "2", "--clip-seconds", "16", "--smoothing", "2,12",
+                    "2,12+pin0.06", "--out", str(out)]) == 0
+    text = out.read_text()
+    slide = {}
+    for line in text.splitlines():
+        for label in ("--smoothing 2,12 (the engine's default)", "--smoothing 2,12 --foot-pin 0.06"):
+            if line.startswith(f"| {label} |") and line.count("|") == 10:   # the drift table's row
+                slide[label] = float(line.split("|")[-2])
+    free, pinned = slide["--smoothing 2,12 (the engine's default)"], slide["--smoothing 2,12 --foot-pin 0.06"]
+    assert 0.0 < pinned < free, (pinned, free)
+    assert "planted feet slide" in text and "The motion capture's own planted feet slide" in text

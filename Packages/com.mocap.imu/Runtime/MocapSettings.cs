@@ -200,6 +200,8 @@ namespace Mocap.Imu
         [Min(0f)] public float smoothingBeta = 12f;
         [Tooltip("Smoothing that waits: each pose averages the frames either side of it and comes this many frames (16.7 ms each) later, in place of the filter above. Less jitter at no accuracy cost, for recording and streaming; 0 for VR (no added latency).")]
         [Range(0, SolverConfig.MaxSmoothingDelayFrames)] public int smoothingDelayFrames;
+        [Tooltip("Foot pinning: a planted foot stays where it touched down (the leg bends to reach it), sliding at most this fast (m/s). 0.06 leaves about the slide of real feet rolling heel to toe; 0 = off (the predicted legs as they are).")]
+        [Range(0f, SolverConfig.MaxFootPinSlideSpeed)] public float footPinSlideSpeed = 0.06f;
 
         [Header("Characters (one sensor set each)")]
         [Tooltip("One entry per performer: each has its own sensor set and drives its own avatar.")]
@@ -272,6 +274,7 @@ namespace Mocap.Imu
                 SmoothingMinCutoffHz = smoothingMinCutoffHz,
                 SmoothingBeta = smoothingBeta,
                 SmoothingDelayFrames = smoothingDelayFrames,
+                FootPinSlideSpeed = footPinSlideSpeed,
             };
         }
 

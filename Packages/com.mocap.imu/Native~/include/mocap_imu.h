@@ -47,7 +47,7 @@ extern "C" {
 #endif
 
 #define MOCAP_API_VERSION 6
-#define MOCAP_API_VERSION_MINOR 2
+#define MOCAP_API_VERSION_MINOR 3
 /* The most sensors one session (one character) carries: a HiPNUC gateway's limit. A session's
  * own count comes from its config; no array below is filled beyond it. */
 #define MOCAP_MAX_SENSORS 16
@@ -592,6 +592,16 @@ MOCAP_API mocap_status mocap_solver_set_character_height(mocap_solver *solver, i
  * frame after a start or reset and the last frame when a session ends, so every frame still gets
  * its pose. 0 (the default) turns it off. Before mocap_solver_start; one thread. */
 MOCAP_API mocap_status mocap_solver_set_smoothing_delay(mocap_solver *solver, int32_t frames);
+/* Fastest slide mocap_solver_set_foot_pinning takes, m/s. */
+#define MOCAP_FOOT_PIN_SLIDE_MAX 1.0f
+/* (API 6.3) Foot pinning: with slide_m_s > 0, a foot whose contact probability reaches the
+ * contact threshold is held where it touched down in the poses handed out, its leg bent to reach
+ * it (hip and knee by two-bone inverse kinematics, the ankle keeping its global rotation). The
+ * held point follows the predicted foot at up to slide_m_s and stays within 5 cm of it; after
+ * lift-off the leg returns to the predicted pose within about a tenth of a second. Root motion,
+ * contacts and the rest of the body are unchanged. 0 (the default) turns it off. Before
+ * mocap_solver_start; one thread. */
+MOCAP_API mocap_status mocap_solver_set_foot_pinning(mocap_solver *solver, float slide_m_s);
 
 /* Counters and health of a solver. A frame whose inference fails (ONNX Runtime out of memory,
  * a model that cannot run these inputs) keeps the character's previous pose and state and is

@@ -238,6 +238,43 @@ TEST_F(MocapctlPose, HeightOptionScalesTheRootVelocityAndRejectsBadValues)
     }
 }
 
+// --foot-pin bends the legs of planted feet and leaves the root, the contacts and the upper body
+// as they were; speeds outside 0..1 m/s are refused before anything runs.
+TEST_F(MocapctlPose, FootPinOptionHoldsPlantedFeetAndRejectsBadValues)
+{
+    const std::string free = dir + "/free.jsonl", pinned = dir + "/pinned.jsonl";
+    Result r = mocapctl("replay " + capture + " --smoothing 0 --json " + free);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = mocapctl("replay " + capture + " --smoothing 0 --foot-pin 0.06 --json " + pinned);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    Result check = run("\"" + py + "\" -c \"import json,sys,math\n"
+                       "free=[json.loads(l) for l in open(sys.argv[1])]\n"
+                       "pin=[json.loads(l) for l in open(sys.argv[2])]\n"
+                       "assert len(free)==len(pin)>300\n"
+                       "def slide(poses):\n"
+                       "    s=n=0\n"
+                       "    for a,b in zip(poses,poses[1:]):\n"
+                       "        for f,j in ((0,10),(1,11)):\n"
+                       "            if (a['flags']>>f)&1 and (b['flags']>>f)&1:\n"
+                       "                p,q=a['joint_positions'][j],b['joint_positions'][j]\n"
+                       "                s+=math.hypot(q[0]-p[0],q[2]-p[2]); n+=1\n"
+                       "    return s/max(n,1),n\n"
+                       "for a,b in zip(free,pin):\n"
+                       "    assert a['root_position']==b['root_position'] and a['flags']==b['flags']\n"
+                       "    assert a['joint_rotations'][15]==b['joint_rotations'][15]\n"
+                       "(sf,n),(sp,_)=slide(free),slide(pin)\n"
+                       "assert n>100,n\n"
+                       "assert sp<sf,(sp,sf)\n"
+                       "print(round(sf*60,3),round(sp*60,3))\" " + free + " " + pinned);
+    ASSERT_EQ(check.exit_code, 0) << check.output;
+    for (const char *bad : {"abc", "-0.1", "1.5", "0.06m", "nan"}) {
+        r = mocapctl("replay " + capture + " --json " + dir + "/bad.jsonl --foot-pin " + bad);
+        EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find("--foot-pin wants the fastest a planted foot may slide"), std::string::npos)
+            << r.output;
+    }
+}
+
 // A realtime stream paced faster than inference loses frames on the way; the engine counts them,
 // and `stream` now says so (before, 1,800 recorded frames became ~1,100 poses without a word).
 // An as-fast-as-possible replay waits for the solver instead and loses nothing.

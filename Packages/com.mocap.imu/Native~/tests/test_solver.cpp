@@ -516,7 +516,7 @@ TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion
               MOCAP_ERR_UNSUPPORTED);
     EXPECT_NE(std::string(mocap_last_error()).find("session counter 15 is not known"), std::string::npos)
         << mocap_last_error();
-    EXPECT_NE(std::string(mocap_last_error()).find("API 6.2"), std::string::npos) << mocap_last_error();
+    EXPECT_NE(std::string(mocap_last_error()).find("API 6.3"), std::string::npos) << mocap_last_error();
     EXPECT_EQ(value, 7u);
     EXPECT_EQ(mocap_session_get_counter(sessions.list[0], -1, &value), MOCAP_ERR_UNSUPPORTED);
     EXPECT_EQ(mocap_solver_get_counter(solver.s, -1, MOCAP_SOLVER_COUNTER_COUNT, &value), MOCAP_ERR_UNSUPPORTED);
@@ -529,10 +529,11 @@ TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion
     EXPECT_EQ(mocap_api_version_minor(), MOCAP_API_VERSION_MINOR);
 }
 
-// The poses of one replay solved with the given solver config (nullptr: defaults) and smoothing
-// delay.
+// The poses of one replay solved with the given solver config (nullptr: defaults), smoothing
+// delay and foot pinning.
 std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap, const synth_config &cfg,
-                                     const mocap_solver_config *config, int32_t smoothing_delay = 0)
+                                     const mocap_solver_config *config, int32_t smoothing_delay = 0,
+                                     float foot_pin = 0.0f)
 {
     Sessions sessions;
     sessions.list.push_back(open_replay(cap, cfg));
@@ -541,6 +542,7 @@ std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap,
     int32_t ch = -1;
     if (!sessions.list[0] || mocap_solver_open(model, config, &solver.s) != MOCAP_OK ||
         mocap_solver_set_smoothing_delay(solver.s, smoothing_delay) != MOCAP_OK ||
+        mocap_solver_set_foot_pinning(solver.s, foot_pin) != MOCAP_OK ||
         mocap_solver_add_character(solver.s, sessions.list[0], &ch) != MOCAP_OK ||
         mocap_solver_start(solver.s) != MOCAP_OK || mocap_session_start(sessions.list[0]) != MOCAP_OK) {
         ADD_FAILURE() << mocap_last_error();
@@ -727,7 +729,7 @@ TEST(Solver, SmoothingThatWaitsHoldsNonFiniteFramesAndFlushesOnReset)
     EXPECT_FALSE(poses[0].flags & MOCAP_POSE_INCOMPLETE);
 }
 
-TEST_F(SolverOnShippedModel, SmoothingDelayIsCheckedAndSetBeforeTheStart)
+TEST_F(SolverOnShippedModel, SmoothingDelayAndFootPinningAreCheckedAndSetBeforeTheStart)
 {
     Sessions sessions;   // closed after the solver
     Solver solver;
@@ -739,6 +741,13 @@ TEST_F(SolverOnShippedModel, SmoothingDelayIsCheckedAndSetBeforeTheStart)
     EXPECT_EQ(mocap_solver_set_smoothing_delay(nullptr, 1), MOCAP_ERR_INVALID_ARGUMENT);
     EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, MOCAP_SMOOTHING_DELAY_MAX), MOCAP_OK);
     EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, 0), MOCAP_OK);
+    for (float bad : {-0.01f, MOCAP_FOOT_PIN_SLIDE_MAX * 1.5f, std::nanf("")}) {
+        EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, bad), MOCAP_ERR_INVALID_ARGUMENT) << bad;
+        EXPECT_NE(std::string(mocap_last_error()).find("foot pinning"), std::string::npos);
+    }
+    EXPECT_EQ(mocap_solver_set_foot_pinning(nullptr, 0.06f), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, MOCAP_FOOT_PIN_SLIDE_MAX), MOCAP_OK);
+    EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, 0.0f), MOCAP_OK);
     std::string cap = test_temp_path("smooth_delay_state.cap");
     synth_config cfg = short_capture(23, 1.0, "mixed", cap);
     sessions.list.push_back(open_replay(cap, cfg));
@@ -746,6 +755,74 @@ TEST_F(SolverOnShippedModel, SmoothingDelayIsCheckedAndSetBeforeTheStart)
     ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK) << mocap_last_error();
     ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK) << mocap_last_error();
     EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, 1), MOCAP_ERR_STATE);
+    EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, 0.06f), MOCAP_ERR_STATE);
+}
+
+// Horizontal speeds (m/s) of the feet in the frames where the pose says a foot is planted (in
+// contact now and in the frame before).
+std::vector<double> planted_foot_speeds(const std::vector<mocap_pose> &poses, double fps)
+{
+    std::vector<double> out;
+    const uint32_t flag[2] = {MOCAP_POSE_CONTACT_LEFT, MOCAP_POSE_CONTACT_RIGHT};
+    const int joint[2] = {10, 11};
+    for (size_t t = 1; t < poses.size(); ++t)
+        for (int f = 0; f < 2; ++f) {
+            if (!(poses[t].flags & flag[f]) || !(poses[t - 1].flags & flag[f])) continue;
+            const float *a = poses[t - 1].joint_positions[joint[f]], *b = poses[t].joint_positions[joint[f]];
+            out.push_back(std::hypot(b[0] - a[0], b[2] - a[2]) * fps);
+        }
+    return out;
+}
+
+// Foot pinning bends the legs of planted feet only: the root, the contacts and the upper body
+// are those of the unpinned poses, and a planted foot slides at most the set speed except where
+// the hold reaches its 5 cm and the foot is dragged along.
+TEST_F(SolverOnShippedModel, FootPinningHoldsPlantedFeetAndLeavesTheRestAlone)
+{
+    std::string cap = test_temp_path("foot_pin.cap");
+    synth_config cfg = short_capture(24, 8.0, "mixed", cap);
+    mocap_solver_config off;
+    mocap_solver_config_defaults(&off);
+    off.smoothing_min_cutoff_hz = 0.0f;
+    const float slide = 0.06f;
+    std::vector<mocap_pose> free_feet = solve_replay(model.m, cap, cfg, &off);
+    std::vector<mocap_pose> pinned = solve_replay(model.m, cap, cfg, &off, 0, slide);
+    ASSERT_GT(free_feet.size(), 400u);
+    ASSERT_EQ(pinned.size(), free_feet.size());
+    mocap_model_info info;
+    ASSERT_EQ(mocap_model_get_info(model.m, &info), MOCAP_OK);
+    const double fps = info.frame_rate;
+    size_t legs_moved = 0;
+    for (size_t t = 0; t < pinned.size(); ++t) {
+        const mocap_pose &a = free_feet[t], &b = pinned[t];
+        ASSERT_EQ(0, memcmp(a.root_position, b.root_position, sizeof a.root_position)) << t;
+        ASSERT_EQ(a.flags, b.flags) << t;
+        for (int j : {0, 3, 6, 9, 12, 15, 16, 17, 20, 21})   // the trunk, head and arms
+            for (int k = 0; k < 3; ++k)
+                ASSERT_NEAR(a.joint_positions[j][k], b.joint_positions[j][k], 1e-6) << t << " joint " << j;
+        double d[3] = {b.joint_positions[10][0] - a.joint_positions[10][0],
+                       b.joint_positions[10][1] - a.joint_positions[10][1],
+                       b.joint_positions[10][2] - a.joint_positions[10][2]};
+        EXPECT_LE(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), 0.05 + 1e-5) << t;
+        legs_moved += memcmp(a.joint_rotations[4], b.joint_rotations[4], sizeof a.joint_rotations[4]) != 0;
+    }
+    std::vector<double> before = planted_foot_speeds(free_feet, fps), after = planted_foot_speeds(pinned, fps);
+    ASSERT_GT(before.size(), 100u) << "the capture should plant a foot";
+    auto mean = [](const std::vector<double> &v) {
+        double s = 0.0;
+        for (double x : v) s += x;
+        return s / (double)v.size();
+    };
+    auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        return v[v.size() / 2];
+    };
+    printf("planted feet: mean %.3f -> %.3f m/s, median %.3f -> %.3f; legs bent in %zu of %zu poses\n",
+           mean(before), mean(after), median(before), median(after), legs_moved, pinned.size());
+    EXPECT_GT(legs_moved, 50u);
+    EXPECT_LE(median(after), slide + 1e-3);
+    EXPECT_LT(mean(after), mean(before));
+    check_poses(pinned, info, 0);
 }
 
 // Three characters from three replays are solved in batched inference calls.
@@ -1243,7 +1320,8 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
     EXPECT_EQ(mocap_api_version(), 6);        // 6: sensor sets (counts, segments, states)
-    EXPECT_EQ(mocap_api_version_minor(), 2);  // 6.1: performer height; 6.2: smoothing that waits
+    EXPECT_EQ(mocap_api_version_minor(), 3);  // 6.1: performer height; 6.2: smoothing that waits;
+                                              // 6.3: foot pinning
     // The sensor-set fields a binding mirrors are in the table too.
     const mocap_field_layout *count = find("mocap_frame", "sensor_count");
     ASSERT_NE(count, nullptr);

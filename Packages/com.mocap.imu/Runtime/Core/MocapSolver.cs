@@ -47,6 +47,14 @@ namespace Mocap.Imu
         /// frames of latency: for recording takes and streaming, not for a VR avatar. 0 (the
         /// default) keeps the one-euro filter.</summary>
         public int SmoothingDelayFrames { get; set; }
+        /// <summary>Fastest <see cref="FootPinSlideSpeed"/> (MOCAP_FOOT_PIN_SLIDE_MAX), m/s.</summary>
+        public const float MaxFootPinSlideSpeed = 1.0f;
+        /// <summary>Foot pinning: with a speed &gt; 0 (m/s) a planted foot stays where it touched
+        /// down, the leg bent to reach it, sliding at most this fast after the predicted foot and
+        /// never more than 5 cm from it; the root and the rest of the body are unchanged. 0.06 gives
+        /// planted feet about the motion capture's own slide. 0 (the default) shows the predicted
+        /// legs as they are.</summary>
+        public float FootPinSlideSpeed { get; set; }
 
         internal unsafe void ToNative(out NativeSolverConfig native)
         {
@@ -128,14 +136,15 @@ namespace Mocap.Imu
             handle.Adopt(solver);
             var delay = config?.SmoothingDelayFrames ?? 0;
             if (delay != 0)
-            {
                 status = NativeSolverMethods.mocap_solver_set_smoothing_delay(handle, delay);
-                if (status != MocapStatus.Ok)
-                {
-                    var failure = NativeMethods.Failure(status);
-                    handle.Dispose();
-                    throw failure;
-                }
+            var slide = config?.FootPinSlideSpeed ?? 0f;
+            if (status == MocapStatus.Ok && slide != 0f)
+                status = NativeSolverMethods.mocap_solver_set_foot_pinning(handle, slide);
+            if (status != MocapStatus.Ok)
+            {
+                var failure = NativeMethods.Failure(status);
+                handle.Dispose();
+                throw failure;
             }
             return new MocapSolver(model, handle);
         }

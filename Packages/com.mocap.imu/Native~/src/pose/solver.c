@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "drift.h"
+#include "foot_pin.h"
 #include "error.h"
 #include "mocap_math.h"
 #include "platform.h"
@@ -51,6 +52,7 @@ typedef struct character {
     int session_ended;
     int64_t last_frame_ns;      /* monotonic time a frame last became pending (0: never) */
     drift_state drift;
+    foot_pin_state pin;
     pose_filter_state smoothing;
     /* Smoothing that waits: the last frames, oldest first; waiting[next_emit] is the next to
      * become a pose (the ones before it are poses already). */
@@ -83,6 +85,7 @@ struct mocap_solver {
     mocap_solver_config config;
     skeleton sk;
     drift_params drift;
+    foot_pin_params pin;
     pose_filter_params smoothing;
     int smoothing_delay;        /* frames the centred window waits for (0: the one-euro filter) */
     double smoothing_weights[WAITING_FRAMES]; /* its binomial weights */
@@ -240,7 +243,10 @@ static void emit_pose(mocap_solver *s, int32_t c, const waiting_frame *e, double
     double rel[MOCAP_JOINT_COUNT][3];
     const double zero[3] = {0, 0, 0};
     skeleton_fk(&s->sk, (const double (*)[4])q, zero, NULL, rel);
-    if (!ch->drift.initialized) drift_reset(&ch->drift, s->sk.offsets[0]);
+    if (!ch->drift.initialized) {
+        drift_reset(&ch->drift, s->sk.offsets[0]);
+        foot_pin_reset(&ch->pin);
+    }
     const double gain = bits_to_double(mocap_atomic_load_u64(&ch->velocity_gain_bits));
     double v[3] = {e->vel[0] * gain, e->vel[1] * gain, e->vel[2] * gain};
     double p[2] = {e->contact[0], e->contact[1]};
@@ -249,6 +255,10 @@ static void emit_pose(mocap_solver *s, int32_t c, const waiting_frame *e, double
     memcpy(feet[1], rel[SKELETON_RIGHT_FOOT], sizeof feet[1]);
     double root[3];
     int corrected = drift_step(&ch->drift, &s->drift, v, p, (const double (*)[3])feet, root);
+    /* Drift correction reads the feet of the predicted pose; the shown pose holds planted feet. */
+    const int planted[2] = {p[0] >= s->drift.contact_threshold, p[1] >= s->drift.contact_threshold};
+    if (foot_pin_apply(&ch->pin, &s->pin, &s->sk, root, planted, q) > 0)
+        skeleton_fk(&s->sk, (const double (*)[4])q, zero, NULL, rel);
 
     mocap_pose *pose = &s->pose;
     pose->sequence = ch->pose_sequence++;
@@ -704,6 +714,9 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
     s->drift.foot_height[0] = s->sk.foot_height[0];
     s->drift.foot_height[1] = s->sk.foot_height[1];
     s->drift.foot_lock = DRIFT_FOOT_LOCK;
+    s->pin.dt = 1.0 / info->frame_rate;
+    s->pin.max_offset = 0.0;   /* off until mocap_solver_set_foot_pinning */
+    s->pin.release_s = FOOT_PIN_RELEASE_S;
     s->drift.enabled = cfg.drift_correction != 0;
     *out = s;
     return MOCAP_OK;
@@ -923,6 +936,19 @@ mocap_status mocap_solver_set_smoothing_delay(mocap_solver *s, int32_t frames)
                           MOCAP_SMOOTHING_DELAY_MAX);
     s->smoothing_delay = frames;
     binomial_weights(frames, s->smoothing_weights);
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_set_foot_pinning(mocap_solver *s, float slide_m_s)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver is NULL");
+    if (s->started || s->prepared)
+        return mocap_fail(MOCAP_ERR_STATE, "foot pinning is set before mocap_solver_start");
+    if (!(slide_m_s >= 0.0f && slide_m_s <= MOCAP_FOOT_PIN_SLIDE_MAX))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "foot pinning slide %g m/s is outside 0..%g "
+                          "(0: off)", (double)slide_m_s, (double)MOCAP_FOOT_PIN_SLIDE_MAX);
+    s->pin.max_offset = slide_m_s > 0.0f ? FOOT_PIN_MAX_OFFSET_M : 0.0;
+    s->pin.creep_speed = slide_m_s;
     return MOCAP_OK;
 }
 

@@ -198,6 +198,22 @@ int cli_height(int argc, char **argv, float *out)
     return 0;
 }
 
+int cli_foot_pin(int argc, char **argv, float *out)
+{
+    *out = 0.0f;
+    const char *text = cli_value(argc, argv, "--foot-pin");
+    if (!text) return 0;
+    char *end = NULL;
+    double v = strtod(text, &end);
+    if (end == text || *end != '\0' || !(v >= 0.0 && v <= MOCAP_FOOT_PIN_SLIDE_MAX)) {
+        fprintf(stderr, "mocapctl: --foot-pin wants the fastest a planted foot may slide, m/s, "
+                        "0 to %g, got '%s'\n", (double)MOCAP_FOOT_PIN_SLIDE_MAX, text);
+        return 2;
+    }
+    *out = (float)v;
+    return 0;
+}
+
 int height_supported(const mocap_model *model, float height_m)
 {
     float training_height, exponent;

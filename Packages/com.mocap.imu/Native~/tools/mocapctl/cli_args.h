@@ -51,6 +51,13 @@ int32_t cli_smoothing_delay(int argc, char **argv);
 /* --height M (the performer's standing height, metres): *out = M, or 0 when absent; 2 (and a
  * message) when M is not a number in MOCAP_HEIGHT_MIN_M..MOCAP_HEIGHT_MAX_M, else 0. */
 int cli_height(int argc, char **argv, float *out);
+/* --foot-pin SPEED (m/s, for mocap_solver_set_foot_pinning): *out = SPEED, 0 when absent; 2
+ * (and a message) when SPEED is not a number in 0..MOCAP_FOOT_PIN_SLIDE_MAX, else 0. */
+int cli_foot_pin(int argc, char **argv, float *out);
+#define FOOT_PIN_HELP                                                                            \
+    "  --foot-pin SPEED     hold planted feet where they landed, bending the legs, letting them\n" \
+    "                       slide at most SPEED m/s (0.06 keeps the motion capture's own foot\n"  \
+    "                       motion; default 0: off)\n"
 #define HEIGHT_HELP                                                                              \
     "  --height M           the performer's standing height, metres: the root moves for the\n"   \
     "                       model's skeleton as far as they did for their body (needs a model\n" \

@@ -16,13 +16,14 @@
 /* After calibration with the model: the solver consumes the session; prints the pose status
  * (fps, root position, foot contacts, flags) ten times a second. 0, or 1 when inference failed. */
 static int show_poses_until(mocap_session *session, mocap_model *model,
-                            const mocap_solver_config *config, int32_t smoothing_delay, float height_m,
-                            double limit_s)
+                            const mocap_solver_config *config, int32_t smoothing_delay, float foot_pin,
+                            float height_m, double limit_s)
 {
     mocap_solver *solver = NULL;
     int32_t id = -1;
     mocap_status s = mocap_solver_open(model, config, &solver);
     if (s == MOCAP_OK) s = mocap_solver_set_smoothing_delay(solver, smoothing_delay);
+    if (s == MOCAP_OK) s = mocap_solver_set_foot_pinning(solver, foot_pin);
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &id);
     if (s == MOCAP_OK && apply_height(solver, id, height_m) != 0) {
         mocap_solver_close(solver);
@@ -88,6 +89,8 @@ int cmd_live(int argc, char **argv)
     if (cli_smoothing(argc, argv, &solver_config) != 0) return 2;
     float height = 0.0f;
     if (cli_height(argc, argv, &height) != 0) return 2;
+    float foot_pin = 0.0f;
+    if (cli_foot_pin(argc, argv, &foot_pin) != 0) return 2;
     const char *record = cli_value(argc, argv, "--record");
     static const char *const live_outputs[] = {"--record", NULL};
     cli_refuse_overwriting(cli_value(argc, argv, "--port"), "serial port", argc, argv, live_outputs);
@@ -129,7 +132,8 @@ int cmd_live(int argc, char **argv)
     if (rc == GUIDED_STEP_NO_FRAMES) {
         rc = 1; /* nothing arrives: showing an empty status would only wait */
     } else if (rc == 0 && model) {
-        rc = show_poses_until(session, model, &solver_config, cli_smoothing_delay(argc, argv), height, limit);
+        rc = show_poses_until(session, model, &solver_config, cli_smoothing_delay(argc, argv), foot_pin,
+                              height, limit);
     } else {
         live_session_show_status(session, limit);
     }

@@ -575,6 +575,52 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void FootPinningReachesTheEngine()
+        {
+            // Planted feet slide less; the root, the contacts and the upper body stay as they were.
+            Assert.AreEqual(0f, new SolverConfig().FootPinSlideSpeed);
+            var free = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingMinCutoffHz = 0f });
+            var pinned = SolverReplay.SolveOneCharacter(_capture, _model,
+                new SolverConfig { SmoothingMinCutoffHz = 0f, FootPinSlideSpeed = 0.06f });
+            Assert.AreEqual(free.Count, pinned.Count);
+            Assert.Greater(free.Count, 100);
+            int bent = 0;
+            for (int i = 0; i < free.Count; i++)
+            {
+                Assert.AreEqual(free[i].RootPosition, pinned[i].RootPosition, $"pose {i}");
+                Assert.AreEqual(free[i].Flags, pinned[i].Flags, $"pose {i}");
+                Assert.AreEqual(free[i].GetJointPosition(SmplJoint.Head), pinned[i].GetJointPosition(SmplJoint.Head), $"pose {i}");
+                if (!free[i].GetJointRotation(SmplJoint.LeftKnee).Equals(pinned[i].GetJointRotation(SmplJoint.LeftKnee))) bent++;
+            }
+            Assert.Greater(bent, 0, "no leg was bent to hold a foot");
+            Assert.Less(PlantedFootSlide(pinned), PlantedFootSlide(free));
+            var e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model,
+                new SolverConfig { FootPinSlideSpeed = SolverConfig.MaxFootPinSlideSpeed * 2f }));
+            Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
+            StringAssert.Contains("foot pinning", e.Message);
+        }
+
+        // Mean horizontal distance a foot moves between two poses that both say it is planted.
+        static double PlantedFootSlide(IReadOnlyList<MocapPose> poses)
+        {
+            double sum = 0;
+            int n = 0;
+            for (int i = 1; i < poses.Count; i++)
+            {
+                foreach (var (flag, joint) in new[] { (MocapPoseFlags.ContactLeft, SmplJoint.LeftFoot),
+                                                      (MocapPoseFlags.ContactRight, SmplJoint.RightFoot) })
+                {
+                    if ((poses[i].Flags & flag) == 0 || (poses[i - 1].Flags & flag) == 0) continue;
+                    Vec3 a = poses[i - 1].GetJointPosition(joint), b = poses[i].GetJointPosition(joint);
+                    sum += Math.Sqrt((b.X - a.X) * (b.X - a.X) + (b.Z - a.Z) * (b.Z - a.Z));
+                    n++;
+                }
+            }
+            Assert.Greater(n, 10, "the capture should plant a foot");
+            return sum / n;
+        }
+
+        [Test]
         public void DisposingSessionAndModelBeforeTheSolverIsSafe()
         {
             // The wrong order on purpose: the solver's handle references the session and model
