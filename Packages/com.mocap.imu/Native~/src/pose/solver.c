@@ -266,8 +266,8 @@ static void emit_pose(mocap_solver *s, int32_t c, const waiting_frame *e, double
     pose->time_s = e->time_s;
     pose->character = (uint32_t)c;
     uint32_t flags = 0;
-    if (p[0] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_LEFT;
-    if (p[1] >= s->drift.contact_threshold) flags |= MOCAP_POSE_CONTACT_RIGHT;
+    if (planted[0]) flags |= MOCAP_POSE_CONTACT_LEFT;
+    if (planted[1]) flags |= MOCAP_POSE_CONTACT_RIGHT;
     if (corrected) flags |= MOCAP_POSE_CORRECTED;
     if (!e->fresh) flags |= MOCAP_POSE_INCOMPLETE;
     pose->flags = flags;
