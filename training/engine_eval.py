@@ -32,7 +32,7 @@ engine outputs (drift-corrected) and of the integrated root velocity (the model 
 whether the correction helped at 10 s. Foot contacts: precision and recall of the engine's
 planted flags against the truth's (a foot slower than synthesis.CONTACT_SPEED). Foot slide: the
 mean horizontal speed (cm/s) of the engine's feet (forward kinematics of its poses on the
-model's skeleton, from its root) in the frames where it says they are planted (now and in the
+model's own skeleton, its rest_offsets, from its root) in the frames where it says they are planted (now and in the
 frame before), beside the motion capture's own under its planted labels.
 Writes OUT (default training/results/engine.md; training/results/test/engine.md for --split
 test): the tables, the per-clip figures and the command that made it.
@@ -197,10 +197,10 @@ def foot_slide(positions, planted, fps: float) -> np.ndarray:
     return speed[both]
 
 
-def replay_slide(r: "Replay", truth: dict, fps: float) -> np.ndarray:
-    """foot_slide of a replay's poses: its rotations on the truth's (the model's) skeleton, from
-    the engine's root."""
-    _, pos = sk.forward_kinematics(sk.rot_from_quat(r.quats), r.root, np.asarray(truth["offsets"], np.float64))
+def replay_slide(r: "Replay", model_offsets, fps: float) -> np.ndarray:
+    """foot_slide of a replay's poses: its rotations on the skeleton the engine poses (the
+    model's rest offsets, not the clip's), from the engine's root."""
+    _, pos = sk.forward_kinematics(sk.rot_from_quat(r.quats), r.root, np.asarray(model_offsets, np.float64))
     return foot_slide(pos, r.contact, fps)
 
 
@@ -223,7 +223,7 @@ def scaled_motion(motion: sk.Motion, scale: float) -> sk.Motion:
 
 
 def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: Path, seed: int,
-             mocapctl, height: float = 0.0, root_unit: float = 1.0) -> ClipResult:
+             mocapctl, height: float = 0.0, root_unit: float = 1.0, model_offsets=None) -> ClipResult:
     from .dropout_eval import replay_command
     from .synth_capture import load_truth, synth_capture
     cap = workdir / f"{index:02d}-{motion.name}.cap"
@@ -244,7 +244,8 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
             raise CommandError(f"mocapctl replay {cap.name} --smoothing {s} failed (status "
                                f"{r.returncode}): " + (r.stderr.strip() or r.stdout.strip()[-500:]))
         out.runs[s] = read_replay(poses, metrics, truth)
-        out.slide[s] = replay_slide(out.runs[s], truth, out.fps)
+        if model_offsets is not None:
+            out.slide[s] = replay_slide(out.runs[s], model_offsets, out.fps)
     return out
 
 
@@ -417,8 +418,8 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
     from .ort import mocapctl_path, model_info
     mocapctl = mocapctl_path(require_onnx=True)
     root_unit = 1.0
+    info = model_info(str(model))
     if height:
-        info = model_info(str(model))
         if "training_height" not in info:
             raise UsageError(f"--height: {Path(model).name} has no stride scaling (python3 -m "
                              "training stride-scaling --write)")
@@ -430,7 +431,7 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
         for i, m in enumerate(motions):
             t0 = time.monotonic()
             clips.append(run_clip(scaled_motion(m, body_scale), i, model, settings, sensors, root,
-                                  seed + i, mocapctl, height, root_unit))
+                                  seed + i, mocapctl, height, root_unit, info["rest_offsets"]))
             if progress:
                 progress(f"  {i + 1}/{len(motions)} {m.name}: {len(clips[-1].runs)} replays in "
                          f"{time.monotonic() - t0:.0f} s")

@@ -598,7 +598,7 @@ MOCAP_API mocap_status mocap_solver_set_smoothing_delay(mocap_solver *solver, in
  * contact threshold is held where it touched down in the poses handed out, its leg bent to reach
  * it (hip and knee by two-bone inverse kinematics, the ankle keeping its global rotation). The
  * held point follows the predicted foot at up to slide_m_s and stays within 5 cm of it; after
- * lift-off the leg returns to the predicted pose within about a tenth of a second. Root motion,
+ * lift-off the offset fades with a 0.1 s time constant (below 5 % in 0.3 s). Root motion,
  * contacts and the rest of the body are unchanged. 0 (the default) turns it off. Before
  * mocap_solver_start; one thread. */
 MOCAP_API mocap_status mocap_solver_set_foot_pinning(mocap_solver *solver, float slide_m_s);

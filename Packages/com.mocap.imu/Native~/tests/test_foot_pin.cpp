@@ -108,6 +108,36 @@ TEST(FootPin, AGoalOutOfReachStretchesTheLegTowardsIt)
     EXPECT_NEAR(distance(after[7], after[4]), 0.4, 1e-7);
 }
 
+TEST(FootPin, AHyperextendedKneeBendsForwardToShortenTheLeg)
+{
+    // The predicted knee bent 6 deg backwards; holding the foot 3 cm higher needs a shorter leg.
+    // Bending along the predicted knee's plane would fold it further backwards; the knee must
+    // bend forward, the way knees bend, and still reach.
+    const skeleton sk = legs();
+    double q[MOCAP_JOINT_COUNT][4], p[MOCAP_JOINT_COUNT][3];
+    bent_pose(q);
+    const double x[3] = {1, 0, 0};
+    quat_from_axis_angle(q[4], x, -0.1);
+    const double root[3] = {0, 0.9, 0};
+    positions(sk, q, root, p);
+    const double down[3] = {0, -1, 0};
+    double shin[3];
+    quat_rotate(shin, q[4], down);
+    ASSERT_GT(shin[2], 0.05) << "the shin points forward of the thigh: hyperextended";
+    const double goal[3] = {p[10][0], p[10][1] + 0.03, p[10][2]};
+    EXPECT_LT(foot_pin_reach(&sk, 1, 4, 7, 10, root, goal, q), 1e-9);
+    quat_rotate(shin, q[4], down);
+    EXPECT_LT(shin[2], -0.05) << "the knee now bends forward";
+    // A straight knee bends forward too.
+    bent_pose(q);
+    quat_identity(q[4]);
+    positions(sk, q, root, p);
+    const double higher[3] = {p[10][0], p[10][1] + 0.03, p[10][2]};
+    EXPECT_LT(foot_pin_reach(&sk, 1, 4, 7, 10, root, higher, q), 1e-9);
+    quat_rotate(shin, q[4], down);
+    EXPECT_LT(shin[2], -0.05);
+}
+
 TEST(FootPin, APlantedFootStaysPutWhileThePoseSlidesIt)
 {
     // The pose's foot slides 2 mm a frame (3 cm in 15 frames, 12 cm/s) while the model says it

@@ -60,17 +60,29 @@ double foot_pin_reach(const skeleton *sk, int hip, int knee, int ankle, int foot
     const double a = vec3_norm(thigh), b = vec3_norm(shin);
     double knee_turn[4];
     quat_identity(knee_turn);
-    double bend_axis[3], minus_thigh[3] = {-thigh[0], -thigh[1], -thigh[2]};
-    vec3_cross(bend_axis, minus_thigh, shin);
-    if (a > 1e-9 && b > 1e-9 && vec3_norm(bend_axis) > 1e-6 * a * b) {
-        /* Open or close the knee about its bend axis until hip-to-ankle has the goal's length
-         * (a straight leg has no bend axis; it only swings). */
+    if (a > 1e-9 && b > 1e-9) {
+        /* Open or close the knee until hip-to-ankle has the goal's length. The knee bends
+         * forward about its own x axis (SMPL: flexion turns the shin backwards, about +x). A knee
+         * bent forward turns in the plane of thigh and shin, exactly; a straight or
+         * hyperextended one turns about that axis, so that shortening the leg never bends it
+         * further backwards. */
         const double reach_max = a + b - 1e-6, reach_min = fabs(a - b) + 1e-6;
         const double d = clampd(vec3_norm(hip_to_goal), reach_min, reach_max);
         const double c0 = vec3_norm(hip_to_ankle);
         const double now = acos(clampd((a * a + b * b - c0 * c0) / (2 * a * b), -1.0, 1.0));
         const double want = acos(clampd((a * a + b * b - d * d) / (2 * a * b), -1.0, 1.0));
-        quat_from_axis_angle(knee_turn, bend_axis, want - now);
+        const double x_axis[3] = {1.0, 0.0, 0.0};
+        double flexion_axis[3], plane_axis[3], minus_thigh[3] = {-thigh[0], -thigh[1], -thigh[2]};
+        quat_rotate(flexion_axis, g[knee], x_axis);
+        vec3_cross(plane_axis, minus_thigh, shin);   /* turning about it opens the knee */
+        if (vec3_dot(plane_axis, flexion_axis) < -1e-3 * a * b) {
+            quat_from_axis_angle(knee_turn, plane_axis, want - now);
+        } else {
+            /* Signed flexion: 0 straight, negative hyperextended. */
+            const double flexion_now = -(3.14159265358979323846 - now);
+            const double flexion_want = 3.14159265358979323846 - want;
+            quat_from_axis_angle(knee_turn, flexion_axis, flexion_want - flexion_now);
+        }
     }
     double new_shin[3], new_ankle[3];
     quat_rotate(new_shin, knee_turn, shin);

@@ -22,7 +22,8 @@ extern "C" {
 #define FOOT_PIN_RIGHT_KNEE 5
 #define FOOT_PIN_RIGHT_ANKLE 8
 
-/* The fade after lift-off: a tenth of a second (a step's swing lasts about four). */
+/* The fade after lift-off, a time constant: a tenth of a second (a step's swing lasts about
+ * four), so the leg is back on the prediction before the foot lands again. */
 #define FOOT_PIN_RELEASE_S 0.1
 /* The farthest a held foot is from the predicted one: the further the hold, the more of the
  * leg's predicted pose it bends away (training subjects' replays, mean joint angle against the
@@ -53,8 +54,9 @@ int foot_pin_apply(foot_pin_state *s, const foot_pin_params *p, const skeleton *
                    const double root[3], const int planted[2], double (*q)[4]);
 
 /* Two-bone inverse kinematics of one leg: rewrites q[hip], q[knee], q[ankle] so that joint foot
- * reaches goal (positions relative to joint 0 when root is zero) as nearly as the bone lengths
- * allow, the ankle keeping its global rotation. Returns the distance left to the goal (m). */
+ * reaches goal (world, with joint 0 at root) as nearly as the bone lengths allow, the ankle
+ * keeping its global rotation and the knee bending forward (about its own x axis, as SMPL's
+ * knees flex). Returns the distance left to the goal (m). */
 double foot_pin_reach(const skeleton *sk, int hip, int knee, int ankle, int foot,
                       const double root[3], const double goal[3], double (*q)[4]);
 
