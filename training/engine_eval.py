@@ -154,10 +154,10 @@ class ClipResult:
     @classmethod
     def from_truth(cls, name: str, seconds: float, truth: dict) -> "ClipResult":
         """A clip with no replay yet, its truth's root and planted feet."""
-        contact = truth_contacts(truth)
         _, pos = sk.forward_kinematics(np.asarray(truth["local_rot"], np.float64),
                                        np.asarray(truth["root_pos"], np.float64),
                                        np.asarray(truth["offsets"], np.float64))
+        contact = truth_contacts(pos, float(truth["fps"]))
         return cls(name, seconds, fps=float(truth["fps"]), truth_root=np.asarray(truth["root_pos"], np.float64),
                    truth_contact=contact, truth_slide=foot_slide(pos, contact, float(truth["fps"])))
 
@@ -204,13 +204,11 @@ def replay_slide(r: "Replay", model_offsets, fps: float) -> np.ndarray:
     return foot_slide(pos, r.contact, fps)
 
 
-def truth_contacts(truth: dict) -> np.ndarray:
-    """(N,2) the truth's planted feet, as training labels them (synthesis.foot_contact_labels)."""
+def truth_contacts(positions, fps: float) -> np.ndarray:
+    """(N,2) the truth's planted feet from its joint positions (N,24,3), as training labels them
+    (synthesis.foot_contact_labels)."""
     from .synthesis import foot_contact_labels
-    rot = np.asarray(truth["local_rot"], np.float64)
-    _, pos = sk.forward_kinematics(rot, np.asarray(truth["root_pos"], np.float64),
-                                   np.asarray(truth["offsets"], np.float64))
-    return foot_contact_labels(pos, float(truth["fps"])) > 0.5
+    return foot_contact_labels(positions, fps) > 0.5
 
 
 def scaled_motion(motion: sk.Motion, scale: float) -> sk.Motion:

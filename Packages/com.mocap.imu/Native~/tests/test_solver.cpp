@@ -529,6 +529,15 @@ TEST_F(SolverOnShippedModel, UnknownCounterKeysAreRefusedWithTheKeyAndTheVersion
     EXPECT_EQ(mocap_api_version_minor(), MOCAP_API_VERSION_MINOR);
 }
 
+// The solver's defaults with the output filter off: poses are the model's own outputs.
+mocap_solver_config raw_output_config()
+{
+    mocap_solver_config c;
+    mocap_solver_config_defaults(&c);
+    c.smoothing_min_cutoff_hz = 0.0f;
+    return c;
+}
+
 // The poses of one replay solved with the given solver config (nullptr: defaults), smoothing
 // delay and foot pinning.
 std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap, const synth_config &cfg,
@@ -577,9 +586,7 @@ TEST_F(SolverOnShippedModel, SmoothingRemovesJitterAndCanBeTurnedOff)
 {
     std::string cap = test_temp_path("smooth.cap");
     synth_config cfg = short_capture(21, 6.0, "mixed", cap);
-    mocap_solver_config off;
-    mocap_solver_config_defaults(&off);
-    off.smoothing_min_cutoff_hz = 0.0f;
+    const mocap_solver_config off = raw_output_config();
     std::vector<mocap_pose> raw = solve_replay(model.m, cap, cfg, &off);
     std::vector<mocap_pose> raw_again = solve_replay(model.m, cap, cfg, &off);
     std::vector<mocap_pose> smooth = solve_replay(model.m, cap, cfg, nullptr);
@@ -617,9 +624,7 @@ TEST_F(SolverOnShippedModel, SmoothingThatWaitsAveragesAroundEachFrameAndKeepsEv
 {
     std::string cap = test_temp_path("smooth_wait.cap");
     synth_config cfg = short_capture(22, 5.0, "mixed", cap);
-    mocap_solver_config off;
-    mocap_solver_config_defaults(&off);
-    off.smoothing_min_cutoff_hz = 0.0f;
+    const mocap_solver_config off = raw_output_config();
     std::vector<mocap_pose> raw = solve_replay(model.m, cap, cfg, &off);
     mocap_solver_config defaults;   // the one-euro filter's setting is ignored while waiting
     mocap_solver_config_defaults(&defaults);
@@ -781,9 +786,7 @@ TEST_F(SolverOnShippedModel, FootPinningHoldsPlantedFeetAndLeavesTheRestAlone)
 {
     std::string cap = test_temp_path("foot_pin.cap");
     synth_config cfg = short_capture(24, 8.0, "mixed", cap);
-    mocap_solver_config off;
-    mocap_solver_config_defaults(&off);
-    off.smoothing_min_cutoff_hz = 0.0f;
+    const mocap_solver_config off = raw_output_config();
     const float slide = 0.06f;
     std::vector<mocap_pose> free_feet = solve_replay(model.m, cap, cfg, &off);
     std::vector<mocap_pose> pinned = solve_replay(model.m, cap, cfg, &off, 0, slide);
@@ -1056,10 +1059,8 @@ TEST(Solver, PerformerHeightScalesTheRootVelocityByTheModelsStrideLaw)
     Sessions sessions;  // never started: only their rates are used
     sessions.list.push_back(open_replay(cap, cfg));
     sessions.list.push_back(open_replay(cap, cfg));
-    mocap_solver_config config;
-    mocap_solver_config_defaults(&config);
+    mocap_solver_config config = raw_output_config();
     config.drift_correction = 0;  // the root is then the pure integral of the velocity
-    config.smoothing_min_cutoff_hz = 0;
     Solver solver;
     ASSERT_EQ(mocap_solver_open(model.m, &config, &solver.s), MOCAP_OK) << mocap_last_error();
     int32_t ids[2] = {-1, -1};
@@ -1434,9 +1435,7 @@ void chest_tap(void *user, int32_t, const mocap_frame *frame, const float *, con
 // the model's own outputs.
 std::vector<mocap_pose> solve_to_end(mocap_model *model, mocap_session *session, ChestTap *tap)
 {
-    mocap_solver_config sc;
-    mocap_solver_config_defaults(&sc);
-    sc.smoothing_min_cutoff_hz = 0.0f;
+    const mocap_solver_config sc = raw_output_config();
     Solver solver;
     EXPECT_EQ(mocap_solver_open(model, &sc, &solver.s), MOCAP_OK) << mocap_last_error();
     int32_t ch = -1;

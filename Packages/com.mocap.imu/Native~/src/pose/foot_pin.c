@@ -42,11 +42,13 @@ static void quat_between(double out[4], const double u[3], const double v[3])
 
 static double clampd(double x, double lo, double hi) { return x < lo ? lo : x > hi ? hi : x; }
 
-double foot_pin_reach(const skeleton *sk, int hip, int knee, int ankle, int foot,
-                      const double root[3], const double goal[3], double (*q)[4])
+/* foot_pin_reach on the pose's global rotations g and positions p (its forward kinematics).
+ * Only the leg's own entries of g and p are read and only its hip, knee and ankle in q are
+ * written, so g and p stay valid for the other leg. */
+static double reach_leg(const skeleton *sk, int hip, int knee, int ankle, int foot,
+                        const double (*g)[4], const double (*p)[3], const double goal[3],
+                        double (*q)[4])
 {
-    double g[SKELETON_MAX_JOINTS][4], p[SKELETON_MAX_JOINTS][3];
-    skeleton_fk(sk, (const double (*)[4])q, root, g, p);
     /* The ankle goal that puts the foot on its goal with the foot's bone as it is. */
     double foot_bone[3], ankle_goal[3];
     sub3(foot_bone, p[foot], p[ankle]);
@@ -101,10 +103,19 @@ double foot_pin_reach(const skeleton *sk, int hip, int knee, int ankle, int foot
     quat_conjugate(inv, g_knee);
     quat_multiply(q[ankle], inv, g[ankle]);   /* the ankle keeps its global rotation */
 
-    double p2[SKELETON_MAX_JOINTS][3], left[3];
-    skeleton_fk(sk, (const double (*)[4])q, root, NULL, p2);
-    sub3(left, goal, p2[foot]);
+    /* Where the foot is now: the hip plus the turned hip-to-ankle, plus the unchanged foot bone. */
+    double turned[3], left[3];
+    quat_rotate(turned, hip_turn, new_ankle);
+    for (int k = 0; k < 3; ++k) left[k] = goal[k] - (p[hip][k] + turned[k] + foot_bone[k]);
     return vec3_norm(left);
+}
+
+double foot_pin_reach(const skeleton *sk, int hip, int knee, int ankle, int foot,
+                      const double root[3], const double goal[3], double (*q)[4])
+{
+    double g[SKELETON_MAX_JOINTS][4], p[SKELETON_MAX_JOINTS][3];
+    skeleton_fk(sk, (const double (*)[4])q, root, g, p);
+    return reach_leg(sk, hip, knee, ankle, foot, (const double (*)[4])g, (const double (*)[3])p, goal, q);
 }
 
 static int has_legs(const skeleton *sk)
@@ -122,8 +133,8 @@ int foot_pin_apply(foot_pin_state *s, const foot_pin_params *p, const skeleton *
                    const double root[3], const int planted[2], double (*q)[4])
 {
     if (!(p->max_offset > 0.0) || !has_legs(sk)) return 0;
-    double pos[SKELETON_MAX_JOINTS][3];
-    skeleton_fk(sk, (const double (*)[4])q, root, NULL, pos);
+    double g[SKELETON_MAX_JOINTS][4], pos[SKELETON_MAX_JOINTS][3];
+    skeleton_fk(sk, (const double (*)[4])q, root, g, pos);
     const double fade = p->release_s > 0.0 ? exp(-p->dt / p->release_s) : 0.0;
     int moved = 0;
     for (int f = 0; f < 2; ++f) {
@@ -133,15 +144,14 @@ int foot_pin_apply(foot_pin_state *s, const foot_pin_params *p, const skeleton *
             if (!s->planted[f])
                 for (int k = 0; k < 3; ++k) s->target[f][k] = predicted[k] + s->offset[f][k];
             sub3(s->offset[f], s->target[f], predicted);
-            /* The held point creeps after the pose at up to creep_speed. */
+            /* The held point creeps after the pose at up to creep_speed, and gives way to stay
+             * within max_offset of it. */
             const double creep = p->creep_speed * p->dt, o = vec3_norm(s->offset[f]);
-            const double keep = o > creep ? 1.0 - creep / o : 0.0;
-            for (int k = 0; k < 3; ++k) s->offset[f][k] *= keep;
-            for (int k = 0; k < 3; ++k) s->target[f][k] = predicted[k] + s->offset[f][k];
-            const double n = vec3_norm(s->offset[f]);
-            if (n > p->max_offset) {   /* give way: the held point follows the pose */
-                for (int k = 0; k < 3; ++k) s->offset[f][k] *= p->max_offset / n;
-                for (int k = 0; k < 3; ++k) s->target[f][k] = predicted[k] + s->offset[f][k];
+            double keep = o > creep ? 1.0 - creep / o : 0.0;
+            if (keep * o > p->max_offset) keep = p->max_offset / o;
+            for (int k = 0; k < 3; ++k) {
+                s->offset[f][k] *= keep;
+                s->target[f][k] = predicted[k] + s->offset[f][k];
             }
         } else {
             for (int k = 0; k < 3; ++k) s->offset[f][k] *= fade;
@@ -156,7 +166,8 @@ int foot_pin_apply(foot_pin_state *s, const foot_pin_params *p, const skeleton *
         if (held < 1e-5) continue;
         double goal[3];
         for (int k = 0; k < 3; ++k) goal[k] = predicted[k] + s->offset[f][k];
-        foot_pin_reach(sk, k_chain[f][0], k_chain[f][1], k_chain[f][2], k_chain[f][3], root, goal, q);
+        reach_leg(sk, k_chain[f][0], k_chain[f][1], k_chain[f][2], k_chain[f][3],
+                  (const double (*)[4])g, (const double (*)[3])pos, goal, q);
         ++moved;
     }
     return moved;

@@ -181,37 +181,39 @@ void cli_refuse_overwriting(const char *input, const char *input_what, int argc,
     }
 }
 
-int cli_height(int argc, char **argv, float *out)
+/* The value of option name as a number in lo..hi: *out = it, 0 when the option is absent; -1
+ * (nothing printed, *out 0) when its text is not such a number. *text_out: the text, or NULL. */
+static int option_in_range(int argc, char **argv, const char *name, double lo, double hi,
+                           float *out, const char **text_out)
 {
     *out = 0.0f;
-    const char *text = cli_value(argc, argv, "--height");
+    const char *text = *text_out = cli_value(argc, argv, name);
     if (!text) return 0;
     char *end = NULL;
-    double m = strtod(text, &end);
-    if (end == text || *end != '\0' || !(m >= MOCAP_HEIGHT_MIN_M && m <= MOCAP_HEIGHT_MAX_M)) {
-        fprintf(stderr, "mocapctl: --height wants the performer's standing height in metres, "
-                        "%g to %g, got '%s'\n", (double)MOCAP_HEIGHT_MIN_M,
-                (double)MOCAP_HEIGHT_MAX_M, text);
-        return 2;
-    }
-    *out = (float)m;
+    double v = strtod(text, &end);
+    if (end == text || *end != '\0' || !(v >= lo && v <= hi)) return -1;
+    *out = (float)v;
     return 0;
+}
+
+int cli_height(int argc, char **argv, float *out)
+{
+    const char *text;
+    if (option_in_range(argc, argv, "--height", MOCAP_HEIGHT_MIN_M, MOCAP_HEIGHT_MAX_M, out, &text) == 0)
+        return 0;
+    fprintf(stderr, "mocapctl: --height wants the performer's standing height in metres, "
+                    "%g to %g, got '%s'\n", (double)MOCAP_HEIGHT_MIN_M, (double)MOCAP_HEIGHT_MAX_M, text);
+    return 2;
 }
 
 int cli_foot_pin(int argc, char **argv, float *out)
 {
-    *out = 0.0f;
-    const char *text = cli_value(argc, argv, "--foot-pin");
-    if (!text) return 0;
-    char *end = NULL;
-    double v = strtod(text, &end);
-    if (end == text || *end != '\0' || !(v >= 0.0 && v <= MOCAP_FOOT_PIN_SLIDE_MAX)) {
-        fprintf(stderr, "mocapctl: --foot-pin wants the fastest a planted foot may slide, m/s, "
-                        "0 to %g, got '%s'\n", (double)MOCAP_FOOT_PIN_SLIDE_MAX, text);
-        return 2;
-    }
-    *out = (float)v;
-    return 0;
+    const char *text;
+    if (option_in_range(argc, argv, "--foot-pin", 0.0, MOCAP_FOOT_PIN_SLIDE_MAX, out, &text) == 0)
+        return 0;
+    fprintf(stderr, "mocapctl: --foot-pin wants the fastest a planted foot may slide, m/s, "
+                    "0 to %g, got '%s'\n", (double)MOCAP_FOOT_PIN_SLIDE_MAX, text);
+    return 2;
 }
 
 int height_supported(const mocap_model *model, float height_m)
