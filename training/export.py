@@ -31,8 +31,8 @@ import torch
 from . import onnx_metadata, sensors as se
 from . import skeleton as sk
 from .errors import CommandError, UsageError
-from .model import (ExportWrapper, MaskedExportWrapper, MirrorEnsemble, ModelConfig, PoseNet, count_parameters,
-                    non_finite_tensors)
+from .model import (ACC_SCALE, ExportWrapper, MaskedExportWrapper, MirrorEnsemble, ModelConfig, NetworkOnly,
+                    OUTPUT_SIZE, PoseNet, count_parameters, feature_size, non_finite_tensors)
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = REPO / "Packages" / "com.mocap.imu" / "Runtime" / "Models"
@@ -40,6 +40,16 @@ DEFAULT_CHECKPOINT = REPO / "training" / "data" / "checkpoints" / "best.pt"
 OPSET = 14
 CONTRACT_VERSION = "1"
 MASKED_CONTRACT_VERSION = "2"
+NETWORK_ONLY_CONTRACT_VERSION = "3"
+# Where the geometry runs: "graph" writes the whole model into the file (contract 1 or 2, any
+# ONNX runtime can run it); "engine" writes the learned network alone (contract 3) and leaves the
+# geometry to the engine, which does it in a few microseconds instead of ~130 graph operators.
+GEOMETRIES = ("graph", "engine")
+NETWORK_INPUT_NAMES = ["network_input", "state_in_h", "state_in_c"]
+NETWORK_OUTPUT_NAMES = ["network_output", "state_out_h", "state_out_c"]
+# Metadata a new export takes over from a model file (--stride-from): the stride law is measured
+# on the weights (stride-scaling), so the same weights in another form keep it.
+STRIDE_KEYS = ("mocap.training_height", "mocap.stride_exponent")
 INPUT_NAMES = ["imu_orientation", "imu_acceleration", "state_in_h", "state_in_c"]
 MASKED_INPUT_NAMES = ["imu_orientation", "imu_acceleration", "imu_mask", "state_in_h", "state_in_c"]
 OUTPUT_NAMES = ["joint_rotations", "root_velocity", "foot_contact", "state_out_h", "state_out_c"]
@@ -88,6 +98,59 @@ def contract_metadata(net: PoseNet, precision: str, model_name: str) -> dict:
     }
 
 
+def geometry_metadata(net) -> dict:
+    """Contract 3's description of the geometry the engine does for a PoseNet or MirrorEnsemble
+    (docs/model-contract.md)."""
+    from .skeleton import MIRROR_JOINTS
+    mirror = isinstance(net, MirrorEnsemble)
+    inner = net.net if mirror else net
+    n = len(inner.config.sensors)
+    anchors = inner.anchor_joints if inner.config.anchored else [0] * n
+    meta = {
+        "mocap.contract_version": NETWORK_ONLY_CONTRACT_VERSION,
+        "mocap.acceleration_scale": _fmt(ACC_SCALE),
+        "mocap.anchor_joints": ",".join(str(j) for j in anchors),
+        "mocap.masked_features": "1" if inner.config.masked else "0",
+        "mocap.mirror_average": "1" if mirror else "0",
+    }
+    if mirror:
+        meta["mocap.mirror_sensors"] = ",".join(str(k) for k in net.mirror_sensors)
+        meta["mocap.mirror_joints"] = ",".join(str(j) for j in MIRROR_JOINTS)
+    return meta
+
+
+def export_network_fp32(net, path, model_name: str) -> None:
+    """Contract 3: the learned network of net (a PoseNet or MirrorEnsemble) alone."""
+    import onnx
+    import warnings
+    net = net.cpu().eval()
+    mirror = isinstance(net, MirrorEnsemble)
+    inner = net.net if mirror else net
+    core = NetworkOnly(net).eval()
+    rows = 2 if mirror else 1
+    features = feature_size(len(inner.config.sensors), inner.config.masked)
+    x = torch.zeros(rows, 4, features)
+    h, c = inner.zero_state(rows)
+    dyn = {"network_input": {0: "R", 1: "T"}, "state_in_h": {1: "R"}, "state_in_c": {1: "R"},
+           "network_output": {0: "R", 1: "T"}, "state_out_h": {1: "R"}, "state_out_c": {1: "R"}}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with torch.no_grad(), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        torch.onnx.export(core, (x, h, c), str(path), input_names=NETWORK_INPUT_NAMES,
+                          output_names=NETWORK_OUTPUT_NAMES, dynamic_axes=dyn, opset_version=OPSET,
+                          do_constant_folding=True)
+    model = onnx.load(str(path))
+    L, H = inner.state_layers, inner.state_size
+    _set_shapes(model, {"network_input": ["R", "T", features], "state_in_h": [L, "R", H],
+                        "state_in_c": [L, "R", H], "network_output": ["R", "T", OUTPUT_SIZE],
+                        "state_out_h": [L, "R", H], "state_out_c": [L, "R", H]})
+    onnx_metadata.replace(model, contract_metadata(net, "fp32", model_name) | geometry_metadata(net))
+    model.doc_string = "com.mocap.imu pose network, contract version " + NETWORK_ONLY_CONTRACT_VERSION
+    onnx.checker.check_model(model)
+    onnx.save(model, str(path))
+
+
 def export_fp32(net: PoseNet, path, model_name: str) -> None:
     import onnx
     net = net.cpu().eval()
@@ -125,10 +188,13 @@ def _fix_state_shapes(model, net: PoseNet) -> None:
     """Write the contract's shapes on every input and output (symbolic B and T, static rest;
     the exporter leaves some static dims symbolic, e.g. the 24 of a Concat)."""
     L, H, n = net.state_layers, net.state_size, len(net.config.sensors)
-    shapes = {"imu_orientation": ["B", "T", n, 3, 3], "imu_acceleration": ["B", "T", n, 3], "imu_mask": ["B", "T", n],
-              "state_in_h": [L, "B", H], "state_in_c": [L, "B", H],
-              "joint_rotations": ["B", "T", 24, 3, 3], "root_velocity": ["B", "T", 3],
-              "foot_contact": ["B", "T", 2], "state_out_h": [L, "B", H], "state_out_c": [L, "B", H]}
+    _set_shapes(model, {"imu_orientation": ["B", "T", n, 3, 3], "imu_acceleration": ["B", "T", n, 3],
+                        "imu_mask": ["B", "T", n], "state_in_h": [L, "B", H], "state_in_c": [L, "B", H],
+                        "joint_rotations": ["B", "T", 24, 3, 3], "root_velocity": ["B", "T", 3],
+                        "foot_contact": ["B", "T", 2], "state_out_h": [L, "B", H], "state_out_c": [L, "B", H]})
+
+
+def _set_shapes(model, shapes: dict) -> None:
     for vi in list(model.graph.input) + list(model.graph.output):
         want = shapes[vi.name]
         shp = vi.type.tensor_type.shape
@@ -170,6 +236,18 @@ def convert_fp16(src, dst) -> dict:
     onnx.checker.check_model(model)
     onnx.save(model, str(dst))
     return {"fp16_values": int(converted)}
+
+
+def copy_stride_law(src, dst) -> None:
+    """dst's metadata takes src's stride law (STRIDE_KEYS); a UsageError when src has none."""
+    import onnx
+    theirs = onnx_metadata.read(onnx.load(str(src), load_external_data=False))
+    missing = [k for k in STRIDE_KEYS if k not in theirs]
+    if missing:
+        raise UsageError(f"{src} has no {' / '.join(missing)} to take over; nothing written")
+    model = onnx.load(str(dst))
+    onnx_metadata.replace(model, onnx_metadata.read(model) | {k: theirs[k] for k in STRIDE_KEYS})
+    onnx.save(model, str(dst))
 
 
 def load_checkpoint(path) -> tuple:
@@ -287,12 +365,16 @@ def require_contract_sensors(net, what: str) -> None:
                          f"(train --masked, --optional or --sensor-dropout); nothing written")
 
 
-def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True) -> dict:
+def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", check: bool = True,
+           geometry: str = "graph", stride_from=None) -> dict:
     """Write out_dir/FP32_NAME and FP16_NAME: both as temporaries beside them, checked (check and
     ONNX Runtime available), then moved over the previous files. A failed check raises
     ExportCheckError and leaves the previous files untouched. Non-finite weights are refused
     before anything is written: unlike the ONNX Runtime check, this one always runs (--no-check,
-    or no ONNX Runtime, would otherwise install a model that outputs NaN)."""
+    or no ONNX Runtime, would otherwise install a model that outputs NaN). geometry: GEOMETRIES;
+    stride_from: a model file whose stride law (STRIDE_KEYS) the new files take over."""
+    if geometry not in GEOMETRIES:
+        raise UsageError(f"geometry {geometry!r}: expected one of {', '.join(GEOMETRIES)}")
     require_exportable(net, "the network")
     bad = non_finite_tensors(net.state_dict())
     if bad:
@@ -303,7 +385,9 @@ def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", ch
     tag = f"{os.getpid()}.tmp.onnx"   # ".onnx" last: tools that look at the suffix still load it
     t32, t16 = out_dir / f".{FP32_NAME}.{tag}", out_dir / f".{FP16_NAME}.{tag}"
     try:
-        export_fp32(net, t32, model_name)
+        (export_network_fp32 if geometry == "engine" else export_fp32)(net, t32, model_name)
+        if stride_from is not None:
+            copy_stride_law(stride_from, t32)
         convert_fp16(t32, t16)
         info = {"fp32": str(p32), "fp16": str(p16), "fp32_bytes": t32.stat().st_size,
                 "fp16_bytes": t16.stat().st_size, "parameters": count_parameters(net),
@@ -344,11 +428,15 @@ def main(args) -> int:
             name += " mirror-averaged"
         name += checkpoint_label(ck)
     info = export(net, getattr(args, "out", None) or DEFAULT_OUT, model_name=name,
-                  check=not getattr(args, "no_check", False))
+                  check=not getattr(args, "no_check", False),
+                  geometry=getattr(args, "geometry", None) or "graph",
+                  stride_from=getattr(args, "stride_from", None))
     print(json.dumps(info, indent=1))
     # The height input's stride law belongs to the weights and is measured, not exported.
-    print("export: these files carry no stride law for the height input yet: python3 -m training "
-          "stride-scaling --model FP32 --write FP32 FP16, then quantize (the int8 file copies it)")
+    if getattr(args, "stride_from", None) is None:
+        print("export: these files carry no stride law for the height input yet: python3 -m training "
+              "stride-scaling --model FP32 --write FP32 FP16, then quantize (the int8 file copies it); "
+              "or take it over from the same weights' earlier file with --stride-from")
     return 0
 
 
@@ -371,5 +459,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("--no-mirror", dest="no_mirror", action="store_true",
                         help="export the single network instead of the mirror-averaged pair "
                              "(model.MirrorEnsemble: ~0.7x the time per frame, larger errors)")
+    parser.add_argument("--geometry", choices=GEOMETRIES, default="graph",
+                        help="graph: the whole model in the file (contract 1/2, any ONNX runtime); "
+                             "engine: the learned network alone (contract 3), the engine doing the "
+                             "geometry (faster per frame)")
+    parser.add_argument("--stride-from", dest="stride_from", default=None, metavar="MODEL",
+                        help="take the stride law (mocap.training_height, mocap.stride_exponent) "
+                             "over from this model file of the same weights")
     parser.add_argument("--no-check", dest="no_check", action="store_true",
                         help="skip the ONNX Runtime vs PyTorch comparison")

@@ -736,6 +736,33 @@ class ExportWrapper(nn.Module):
         return rot, vel, contact, h, c
 
 
+class NetworkOnly(nn.Module):
+    """The learned part of a PoseNet or MirrorEnsemble alone (model contract 3): features (R,T,F)
+    and LSTM state (L,R,H) -> the head's numbers (R,T,149) and the new state, every geometric
+    step (heading, features, residuals, anchoring, mirror average, Gram-Schmidt) left to the
+    engine (Native~/src/pose/network_geometry.c). The head's last layer is reordered so its
+    first 144 numbers are already each joint's columns laid out (joint, row, column)."""
+
+    def __init__(self, net):
+        super().__init__()
+        inner = net.net if isinstance(net, MirrorEnsemble) else net
+        if inner.config.core != "lstm":
+            raise ValueError("only an LSTM network has the state the contract carries")
+        self.embed = inner.embed
+        self.lstm = inner.lstm
+        last = inner.head[-1]
+        order = _COLUMN_ORDER + list(range(NUM_JOINTS * 6, OUTPUT_SIZE))
+        reordered = nn.Linear(last.in_features, last.out_features)
+        with torch.no_grad():
+            reordered.weight.copy_(last.weight[order])
+            reordered.bias.copy_(last.bias[order])
+        self.head = nn.Sequential(*list(inner.head)[:-1], reordered)
+
+    def forward(self, network_input, state_in_h, state_in_c):
+        y, (h, c) = self.lstm(self.embed(network_input), (state_in_h, state_in_c))
+        return self.head(y), h, c
+
+
 class MaskedExportWrapper(nn.Module):
     """Flat signature of model contract 2: the mask is the third input."""
 

@@ -16,8 +16,9 @@ int8, with the activations quantised on the fly (dynamic quantisation: nothing t
 Symmetric: the scale of a column is max |w| / 127 and the zero point 0, so every weight is
 reproduced within half a scale step and a zero weight stays exactly zero. Inputs, outputs,
 shapes and metadata stay those of the contract; `mocap.precision` becomes "int8" and the model
-name says so. Everything else (the geometry of the mirror averaging, normalisation, rotations)
-stays float32.
+name says so. Everything else stays float32: the geometry of a complete graph (contract 1/2:
+mirror averaging, normalisation, rotations), or nothing at all for the network alone (contract
+3, `export --geometry engine`), whose geometry the engine does.
 
 The file is written as a temporary beside OUT, checked against the fp32 model through the real
 ONNX Runtime (training/ort.py: the engine's `mocapctl infer`) on procedural clips, and only then

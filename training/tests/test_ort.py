@@ -58,7 +58,7 @@ def test_run_onnx_matches_closed_form_and_streams(fixtures):
 def test_contract_violation_is_reported(fixtures):
     ori = np.zeros((1, 2, 6, 3, 3), np.float32)
     acc = np.zeros((1, 2, 6, 3), np.float32)
-    with pytest.raises(ort.OnnxRuntimeError, match="mocap.contract_version is '3'"):
+    with pytest.raises(ort.OnnxRuntimeError, match="mocap.contract_version is '9'"):
         ort.run_onnx(fixtures["wrong_version"], ori, acc)
     with pytest.raises(ort.OnnxRuntimeError, match="not a model ONNX Runtime can load"):
         ort.run_onnx(fixtures["not_onnx"], ori, acc)
@@ -109,4 +109,4 @@ def test_contract_two_fixtures_differ_from_v2_chest_in_their_one_defect(fixtures
     v1_meta, v1_inputs = facts("valid")
     assert facts("v1_with_mask") == (v1_meta, {**v1_inputs, "imu_mask": ["B", "T", 6]})
     assert "mocap.sensor_required" not in v1_meta and v1_meta["mocap.contract_version"] == "1"
-    assert facts("wrong_version")[0]["mocap.contract_version"] == "3"
+    assert facts("wrong_version")[0]["mocap.contract_version"] == "9"

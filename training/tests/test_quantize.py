@@ -8,7 +8,7 @@ from onnx import numpy_helper
 from training import export, ort, quantize as qz, train as tr
 from training.__main__ import main
 from training.errors import UsageError
-from training.model import MirrorEnsemble
+from training.model import _COLUMN_ORDER, MirrorEnsemble, NUM_JOINTS, OUTPUT_SIZE
 
 SHIPPED_FP32 = qz.DEFAULT_MODEL
 SHIPPED_INT8 = qz.DEFAULT_OUT
@@ -57,9 +57,20 @@ def _weight_pairs(fp32, int8):
         for k, scale_at in ((1, 8), (2, 10)):   # W with W_scale, R with R_scale
             original = np.transpose(a[n32.input[k]], (0, 2, 1))   # [dir, 4H, in] -> [dir, in, 4H]
             out.append((original, b[n8.input[k]], b[n8.input[scale_at]], 1, f"{n8.name} input {k}"))
+    # the weight matrices by name where both files are one graph, else by shape (each of the
+    # shipped four has its own); the network alone writes the joints' columns in (joint, row,
+    # column) order, where the complete graph gathers them so
+    matrices = {a[n.input[1]].shape: a[n.input[1]] for n in fp32.graph.node
+                if n.op_type == "MatMul" and n.input[1] in a and a[n.input[1]].ndim == 2
+                and min(a[n.input[1]].shape) >= qz.MIN_WEIGHT_DIM}
+    reordered = _COLUMN_ORDER + list(range(NUM_JOINTS * 6, OUTPUT_SIZE))
     for n8 in mm8:
+        q = b[n8.input[1]]
         source = n8.input[1][:-len("_int8")]
-        out.append((a[source], b[n8.input[1]], b[n8.input[2]], 0, n8.name))
+        original = a[source] if source in a else matrices[q.shape]
+        if q.shape[1] == OUTPUT_SIZE and _meta(int8).get("mocap.contract_version") == "3":
+            original = original[:, reordered]
+        out.append((original, q, b[n8.input[2]], 0, n8.name))
     return lstm32, lstm8, mm8, out
 
 
@@ -163,15 +174,24 @@ def test_cli_errors_are_one_line(tiny_fp32, tmp_path, capsys):
 # ------------------------------------------------------------------------------ the committed file
 def test_committed_int8_model_is_the_quantised_shipped_model():
     """Fails when the int8 file is missing, not quantised, or stale (fp32 exported again without
-    running `python3 -m training quantize`)."""
+    exporting its network alone and running `python3 -m training quantize` on it). The int8 file
+    is the network alone (model contract 3, `export --geometry engine`) of the fp32 file's
+    weights; the fp32 file is the complete graph (contract 1)."""
     assert SHIPPED_INT8.is_file(), "run python3 -m training quantize"
     fp32, int8 = onnx.load(str(SHIPPED_FP32)), onnx.load(str(SHIPPED_INT8))
     onnx.checker.check_model(int8)
-    assert _io(int8) == _io(fp32)
+    assert [i.name for i in int8.graph.input] == export.NETWORK_INPUT_NAMES
+    assert [o.name for o in int8.graph.output] == export.NETWORK_OUTPUT_NAMES
     m32, m8 = _meta(fp32), _meta(int8)
     assert m8["mocap.precision"] == "int8" and "int8" in m8["mocap.model_name"]
-    assert {k: v for k, v in m8.items() if k not in ("mocap.precision", "mocap.model_name")} == \
-        {k: v for k, v in m32.items() if k not in ("mocap.precision", "mocap.model_name")}
+    assert m8["mocap.model_name"].startswith(m32["mocap.model_name"])
+    assert m8["mocap.contract_version"] == "3" and m8["mocap.mirror_average"] == "1"
+    own = ("mocap.precision", "mocap.model_name", "mocap.contract_version")
+    geometry = set(m8) - set(m32)
+    assert geometry == {"mocap.acceleration_scale", "mocap.anchor_joints", "mocap.masked_features",
+                        "mocap.mirror_average", "mocap.mirror_sensors", "mocap.mirror_joints"}
+    assert {k: v for k, v in m8.items() if k not in own and k not in geometry} == \
+        {k: v for k, v in m32.items() if k not in own}
     lstm32, lstm8, mm8, pairs = _weight_pairs(fp32, int8)
     assert len(lstm32) == len(lstm8) == 2 and len(mm8) == 4
     assert not [n for n in int8.graph.node if n.op_type == "LSTM"]

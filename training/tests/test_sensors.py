@@ -206,7 +206,7 @@ def test_evaluation_refuses_to_feed_a_model_other_sensors_than_it_reads():
     with pytest.raises(UsageError, match="PyTorch network reads the sensors pelvis,.*,head; clip"):
         ev.predict_torch(six, [chest_clip])
     if ort.onnx_runtime_available():   # the ONNX model's sensor list comes from mocapctl model-info
-        with pytest.raises(UsageError, match="mocap_pose_int8.onnx .model contract 1. reads the sensors .*; "
+        with pytest.raises(UsageError, match="mocap_pose_int8.onnx .model contract 3. reads the sensors .*; "
                                              "clip .* has .*chest"):
             ev.predict_onnx(ev.MODELS_DIR / "mocap_pose_int8.onnx", [chest_clip])
     # the baseline follows the clip's own list: the chest sensor lands on spine3

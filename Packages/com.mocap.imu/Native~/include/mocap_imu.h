@@ -47,7 +47,7 @@ extern "C" {
 #endif
 
 #define MOCAP_API_VERSION 6
-#define MOCAP_API_VERSION_MINOR 3
+#define MOCAP_API_VERSION_MINOR 4
 /* The most sensors one session (one character) carries: a HiPNUC gateway's limit. A session's
  * own count comes from its config; no array below is filled beyond it. */
 #define MOCAP_MAX_SENSORS 16
@@ -456,7 +456,8 @@ typedef struct mocap_model_options {
 
 /* What a model's metadata says (validated against the contract at load). */
 typedef struct mocap_model_info {
-    int32_t contract_version;     /* 1 (six fixed sensors) or 2 (its own sensor set, with a mask) */
+    int32_t contract_version;     /* 1 (six fixed sensors), 2 (its own sensor set, with a mask) or
+                                     3 (API 6.4: the network alone, the engine doing its geometry) */
     uint32_t sensor_count;        /* the model's sensors, in its input order */
     int32_t sensor_segments[MOCAP_MAX_SENSORS]; /* mocap_segment of input sensor k */
     uint32_t sensor_required_mask;/* bit k: the model needs sensor k; the others may be missing */

@@ -33,6 +33,22 @@ chest (`mocap.sensor_order` pelvis,left_wrist,right_wrist,left_shin,right_shin,h
 so a test sees which sensors the engine marked present, that the chest reached joint 9, and what
 the engine fed as the chest's acceleration.
 
+`v3_network` follows contract version 3: the learned network alone, the geometry left to the
+engine. Six sensors, masked features (F = 6 x 12 + 5 x 12 + 6 = 138), the mirror average (two
+rows per character), wrist sensors anchoring the hands; the graph's state is [L = 2, R, 2] (the
+metadata's state size 4 holds both rows):
+
+    network_output[r, t, :] = network_input[r, t, :] @ 0 + bias     (bias: 1 at the heading-frame
+                              root velocity z, +2 / -2 at the contact logits, 0 elsewhere)
+    state_out_h             = state_in_h + 1
+    state_out_c             = state_in_c
+
+so every residual is zero: the engine must answer the rest pose under the measured pelvis with
+the present hands turned as their sensors, the root velocity along the pelvis heading, contact
+0.5. `v3_missing_anchor_joints` lacks mocap.anchor_joints, `v3_wrong_features` reads the 132
+features of an unmasked network while declaring masked ones, `v3_bad_mirror_table` pairs the
+left wrist with itself (so the right wrist pairs with the left one way only).
+
 `stride_scaled` is `valid` with the optional stride scaling (`mocap.training_height` 1.70,
 `mocap.stride_exponent` 0.6); `stride_height_only` gives the height alone and
 `stride_bad_exponent` an exponent of 3, both refused.
@@ -68,7 +84,9 @@ VARIANTS = ["valid", "wrong_input_name", "wrong_rank", "missing_metadata", "miss
             "wrong_output_shape", "rank_nine_output", "fails_on_impact", "v1_with_mask",
             "v2_chest", "v2_unknown_segment", "v2_required_length", "v2_missing_mask",
             "v2_wrong_sensor_dim", "v2_duplicate_segment", "int8_precision", "unknown_precision",
-            "stride_scaled", "stride_height_only", "stride_bad_exponent"]
+            "stride_scaled", "stride_height_only", "stride_bad_exponent", "v3_network",
+            "v3_missing_anchor_joints", "v3_wrong_features", "v3_bad_mirror_table"]
+MIRROR_JOINTS = [0, 2, 1, 3, 5, 4, 6, 8, 7, 9, 11, 10, 12, 14, 13, 15, 17, 16, 19, 18, 21, 20, 23, 22]
 
 
 def metadata(**override):
@@ -186,10 +204,46 @@ def build_v2(variant="v2_chest"):
     return _model(nodes, inputs, _outputs(B), inits, md)
 
 
+def build_v3(variant="v3_network"):
+    """The ModelProto of a contract-3 variant (formulas in the module docstring)."""
+    features = 132 if variant == "v3_wrong_features" else 138
+    half = SIZE // 2
+    inputs = [
+        helper.make_tensor_value_info("network_input", TensorProto.FLOAT, ["R", "T", features]),
+        helper.make_tensor_value_info("state_in_h", TensorProto.FLOAT, [LAYERS, "R", half]),
+        helper.make_tensor_value_info("state_in_c", TensorProto.FLOAT, [LAYERS, "R", half]),
+    ]
+    outputs = [
+        helper.make_tensor_value_info("network_output", TensorProto.FLOAT, ["R", "T", 149]),
+        helper.make_tensor_value_info("state_out_h", TensorProto.FLOAT, [LAYERS, "R", half]),
+        helper.make_tensor_value_info("state_out_c", TensorProto.FLOAT, [LAYERS, "R", half]),
+    ]
+    bias = np.zeros(149, np.float32)
+    bias[146], bias[147], bias[148] = 1.0, 2.0, -2.0
+    inits = [_const("weights", np.zeros((features, 149), np.float32), np.float32),
+             _const("bias", bias, np.float32), _const("one", np.float32(1.0), np.float32)]
+    nodes = [
+        helper.make_node("MatMul", ["network_input", "weights"], ["product"]),
+        helper.make_node("Add", ["product", "bias"], ["network_output"]),
+        helper.make_node("Add", ["state_in_h", "one"], ["state_out_h"]),
+        helper.make_node("Identity", ["state_in_c"], ["state_out_c"]),
+    ]
+    md = metadata(contract_version="3", acceleration_scale="30", anchor_joints="0,22,23,4,5,15",
+                  masked_features="1", mirror_average="1", mirror_sensors="0,2,1,4,3,5",
+                  mirror_joints=",".join(str(j) for j in MIRROR_JOINTS))
+    if variant == "v3_missing_anchor_joints":
+        md.pop("mocap.anchor_joints")
+    if variant == "v3_bad_mirror_table":
+        md["mocap.mirror_sensors"] = "0,1,1,4,3,5"
+    return _model(nodes, inputs, outputs, inits, md)
+
+
 def build(variant="valid"):
     """The ModelProto of one variant."""
     if variant.startswith("v2_"):
         return build_v2(variant)
+    if variant.startswith("v3_"):
+        return build_v3(variant)
     ori_name = "imu_orient" if variant == "wrong_input_name" else "imu_orientation"
     B = 1 if variant == "fixed_batch" else "B"
     ori_shape = [B, "T", 54] if variant == "wrong_rank" else [B, "T", 6, 3, 3]
@@ -283,7 +337,7 @@ def build(variant="valid"):
         if variant == "missing_joint_names":
             override["joint_names"] = None
         if variant == "wrong_version":
-            override["contract_version"] = "3"
+            override["contract_version"] = "9"
         if variant == "state_mismatch":
             override["state_layers"] = "3"
         if variant == "int8_precision":

@@ -140,7 +140,7 @@ TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
         {"wrong_rank.onnx", "'imu_orientation' has rank 3, the contract needs rank 5"},
         {"missing_metadata.onnx", "'mocap.contract_version' is missing"},
         {"missing_joint_names.onnx", "'mocap.joint_names' is missing"},
-        {"wrong_version.onnx", "mocap.contract_version is '3'"},
+        {"wrong_version.onnx", "mocap.contract_version is '9'"},
         {"state_mismatch.onnx", "mocap.state_layers"},
         {"fixed_batch.onnx", "dimension 0 (B) is fixed to 1"},
         {"wrong_joint_name.onnx", "'left_forearm'"},
@@ -155,6 +155,10 @@ TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
         {"v2_wrong_sensor_dim.onnx", "dimension 2 (N) is 6, the contract needs 7 (mocap.sensor_order)"},
         {"v2_duplicate_segment.onnx", "names 'head' twice"},
         {"unknown_precision.onnx", "mocap.precision is 'bf16', expected fp32, fp16 or int8"},
+        // Contract 3: the geometry the engine does must be described, and fit the graph.
+        {"v3_missing_anchor_joints.onnx", "'mocap.anchor_joints' is missing"},
+        {"v3_wrong_features.onnx", "'network_input' dimension 2 (F) is 132, the contract needs 138"},
+        {"v3_bad_mirror_table.onnx", "mirror sensor table: sensor 2 maps to 1"},
     };
     for (const auto &c : cases) {
         Opened o;
@@ -250,6 +254,139 @@ TEST(OnnxRuntime, ContractTwoReadsItsSensorSetAndFeedsTheMask)
         }
     }
     ort_stream_destroy(st);
+}
+
+// A contract-3 model holds the network alone; the engine does the geometry around it. The
+// fixture's network answers zero residuals (make_onnx_fixtures.py, v3_network), so the engine
+// must give the rest pose under the measured pelvis, hands turned as their sensors.
+TEST(OnnxRuntime, ContractThreeLeavesTheGeometryToTheEngine)
+{
+    REQUIRE_ORT();
+    std::string dir = make_fixtures();
+    Opened o;
+    open_model(dir + "/v3_network.onnx", o);
+    ASSERT_EQ(o.status, MOCAP_OK) << o.message;
+    const ort_model_info *info = ort_model_get_info(o.model);
+    EXPECT_EQ(info->contract_version, 3);
+    EXPECT_EQ(info->sensor_count, 6);
+    EXPECT_EQ(info->has_mask, 1);
+    EXPECT_EQ(info->state_size, 4);  // both rows of the mirror average
+
+    const int B = 2, T = 3;
+    ort_stream *st = nullptr;
+    ASSERT_EQ(ort_stream_create(o.model, B, T, &st), MOCAP_OK) << mocap_last_error();
+    ASSERT_EQ(ort_stream_state_count(st), (size_t)2 * B * 4);
+    const double yaw[B] = {0.6, -2.4};
+    std::vector<float> ori((size_t)B * T * 6 * 9, 0.0f);
+    for (int b = 0; b < B; ++b)
+        for (int t = 0; t < T; ++t) {
+            float *f = ori.data() + ((size_t)b * T + t) * 54;
+            const float c = (float)std::cos(yaw[b]), s = (float)std::sin(yaw[b]);
+            const float pelvis[9] = {c, 0, s, 0, 1, 0, -s, 0, c};
+            std::memcpy(f, pelvis, sizeof pelvis);
+            std::vector<float> r = random_floats(45, 10 + b * T + t, 1.0f);
+            for (int k = 1; k < 6; ++k) {  // any rotation: Gram-Schmidt of random columns
+                float *m = f + k * 9;
+                double a[3] = {r[(k - 1) * 9 + 0], r[(k - 1) * 9 + 3], r[(k - 1) * 9 + 6]};
+                double d[3] = {r[(k - 1) * 9 + 1], r[(k - 1) * 9 + 4], r[(k - 1) * 9 + 7]};
+                double na = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+                for (double &x : a) x /= na;
+                double dot = a[0] * d[0] + a[1] * d[1] + a[2] * d[2];
+                for (int i = 0; i < 3; ++i) d[i] -= dot * a[i];
+                double nd = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                for (double &x : d) x /= nd;
+                double e[3] = {a[1] * d[2] - a[2] * d[1], a[2] * d[0] - a[0] * d[2], a[0] * d[1] - a[1] * d[0]};
+                for (int i = 0; i < 3; ++i) {
+                    m[i * 3 + 0] = (float)a[i];
+                    m[i * 3 + 1] = (float)d[i];
+                    m[i * 3 + 2] = (float)e[i];
+                }
+            }
+        }
+    std::memcpy(ort_stream_orientation(st), ori.data(), ori.size() * sizeof(float));
+    float *mask = ort_stream_mask(st);
+    ASSERT_NE(mask, nullptr);
+    for (int i = 0; i < B * T * 6; ++i) mask[i] = 1.0f;
+    mask[(1 * T + 2) * 6 + 1] = 0.0f;  // the second character's left wrist gone in its last frame
+    for (int e = 0; e < 9; ++e) ort_stream_orientation(st)[((1 * T + 2) * 6 + 1) * 9 + e] = 0.0f;
+    ASSERT_EQ(ort_stream_run(st), MOCAP_OK) << mocap_last_error();
+
+    auto mul = [](float *out, const float *a, const float *b) {
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                out[i * 3 + j] = a[i * 3] * b[j] + a[i * 3 + 1] * b[3 + j] + a[i * 3 + 2] * b[6 + j];
+    };
+    for (int b = 0; b < B; ++b)
+        for (int t = 0; t < T; ++t) {
+            const size_t f = (size_t)b * T + t;
+            const float *rot = ort_stream_joint_rotations(st) + f * 216;
+            const float *in = ori.data() + f * 54;
+            for (int e = 0; e < 9; ++e) EXPECT_NEAR(rot[e], in[e], 1e-6) << "pelvis " << b << "," << t;
+            for (int j : {3, 6, 9, 12, 16, 18, 20, 1, 7})
+                for (int e = 0; e < 9; ++e)
+                    EXPECT_NEAR(rot[j * 9 + e], e % 4 == 0 ? 1.0f : 0.0f, 1e-6) << "joint " << j;
+            // the hands' global orientation: the pelvis times their local ones (all between rest)
+            for (int side = 0; side < 2; ++side) {
+                float global[9];
+                mul(global, rot, rot + (22 + side) * 9);
+                const bool missing = b == 1 && t == 2 && side == 0;
+                for (int e = 0; e < 9; ++e)
+                    EXPECT_NEAR(global[e], missing ? rot[e] : in[(1 + side) * 9 + e], 2e-5)
+                        << "hand " << side << " of " << b << "," << t << (missing ? " (missing)" : "");
+            }
+            const float *v = ort_stream_root_velocity(st) + f * 3;
+            EXPECT_NEAR(v[0], std::sin(yaw[b]), 1e-6);
+            EXPECT_NEAR(v[1], 0.0f, 1e-6);
+            EXPECT_NEAR(v[2], std::cos(yaw[b]), 1e-6);
+            const float *contact = ort_stream_foot_contact(st) + f * 2;
+            EXPECT_NEAR(contact[0], 0.5f, 1e-6);  // left +2 and mirrored right -2 averaged
+            EXPECT_NEAR(contact[1], 0.5f, 1e-6);
+        }
+    // the state went through the graph (+1 per run), both rows of every character
+    for (size_t i = 0; i < ort_stream_state_count(st); ++i)
+        ASSERT_FLOAT_EQ(ort_stream_state_h(st)[i], 1.0f) << i;
+    ort_stream_destroy(st);
+}
+
+// The shipped int8 model is contract 3; it must answer what the complete fp32 graph does, to
+// the int8 tolerance, streamed as the engine runs it.
+TEST(OnnxRuntime, ShippedInt8NetworkAnswersLikeTheCompleteFp32Model)
+{
+    REQUIRE_ORT();
+    const fs::path int8_path = kShippedModel.parent_path() / "mocap_pose_int8.onnx";
+    ort_options opts;
+    ort_options_defaults(&opts);
+    opts.intra_op_threads = 1;
+    Opened fp32, int8;
+    open_model(kShippedModel.string(), fp32, &opts);
+    open_model(int8_path.string(), int8, &opts);
+    ASSERT_EQ(fp32.status, MOCAP_OK) << fp32.message;
+    ASSERT_EQ(int8.status, MOCAP_OK) << int8.message;
+    EXPECT_EQ(ort_model_get_info(int8.model)->contract_version, 3);
+    EXPECT_STREQ(ort_model_get_info(int8.model)->precision, "int8");
+    EXPECT_EQ(ort_model_get_info(int8.model)->state_size, ort_model_get_info(fp32.model)->state_size);
+    ort_stream *a = nullptr, *b = nullptr;
+    ASSERT_EQ(ort_stream_create(fp32.model, 1, 1, &a), MOCAP_OK);
+    ASSERT_EQ(ort_stream_create(int8.model, 1, 1, &b), MOCAP_OK);
+    double worst = 0.0;
+    for (int t = 0; t < 30; ++t) {
+        std::vector<float> acc = random_floats(18, 100 + t, 3.0f);
+        for (ort_stream *s : {a, b}) {
+            for (int k = 0; k < 6; ++k) {
+                const float c = (float)std::cos(0.05 * t + k), sn = (float)std::sin(0.05 * t + k);
+                const float m[9] = {c, 0, sn, 0, 1, 0, -sn, 0, c};  // each sensor turned about y
+                std::memcpy(ort_stream_orientation(s) + k * 9, m, sizeof m);
+            }
+            std::memcpy(ort_stream_acceleration(s), acc.data(), 18 * sizeof(float));
+            ASSERT_EQ(ort_stream_run(s), MOCAP_OK) << mocap_last_error();
+        }
+        for (int k = 0; k < 216; ++k)
+            worst = std::fmax(worst, std::fabs(ort_stream_joint_rotations(a)[k] - ort_stream_joint_rotations(b)[k]));
+    }
+    EXPECT_GT(worst, 0.0);   // quantised weights
+    EXPECT_LT(worst, 0.05);  // the quantize check's bound
+    ort_stream_destroy(a);
+    ort_stream_destroy(b);
 }
 
 TEST(OnnxRuntime, CudaWithoutCudaBuildIsRefusedClearly)
@@ -415,7 +552,7 @@ TEST(OnnxRuntime, MocapctlInferStreamMatchesWholeClip)
     EXPECT_NE(info.find("layers 2, size 4"), std::string::npos) << info;
     std::string bad = run_capture(std::string(MOCAP_MOCAPCTL) + " model-info " + dir +
                                   "/wrong_version.onnx 2>&1");
-    EXPECT_NE(bad.find("contract_version is '3'"), std::string::npos) << bad;
+    EXPECT_NE(bad.find("contract_version is '9'"), std::string::npos) << bad;
     EXPECT_EQ(bad.find("rc=0"), std::string::npos) << bad;
     // A mistyped MOCAP_ONNXRUNTIME_PATH is an error naming it, not a quiet fall back to the
     // fetched build (which would have loaded here).

@@ -115,3 +115,8 @@ void mocap_model_close(mocap_model *m)
 
 ort_model *model_ort(mocap_model *m) { return m ? m->ort : NULL; }
 const mocap_model_info *model_info(const mocap_model *m) { return m ? &m->info : NULL; }
+int model_has_mask(const mocap_model *m)
+{
+    const ort_model_info *oi = m ? ort_model_get_info(m->ort) : NULL;
+    return oi ? oi->has_mask : 0;
+}

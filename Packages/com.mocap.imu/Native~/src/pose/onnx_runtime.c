@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "error.h"
+#include "network_geometry.h"
 #include "platform.h"
 #include "smpl_skeleton.h"
 #include "text_number.h"
@@ -202,7 +203,7 @@ const char *ort_library_path(void) { return g_loaded ? g_path : ""; }
 /* Contract 1 fixed the sensors to these six, in this order. */
 static const char *const CONTRACT1_SENSORS = "pelvis,left_wrist,right_wrist,left_shin,right_shin,head";
 
-enum { DIM_DYNAMIC = -1, DIM_LAYERS = -2, DIM_STATE = -3, DIM_SENSORS = -4 };
+enum { DIM_DYNAMIC = -1, DIM_LAYERS = -2, DIM_STATE = -3, DIM_SENSORS = -4, DIM_FEATURES = -5 };
 typedef struct tensor_spec {
     const char *name;
     int rank;
@@ -234,10 +235,31 @@ static const char *const OUTPUT_NAMES[OUTPUT_COUNT] = {"joint_rotations", "root_
                                                        "foot_contact", "state_out_h",
                                                        "state_out_c"};
 
+/* Contract 3: the learned network alone, the geometry done here (network_geometry.h). Its rows
+ * are R = B x rows per character (2 with the mirror average, interleaved: a character's plain
+ * row, then its mirrored one), so its state [L][R][H / rows] lies in memory exactly as the
+ * [L][B][H] state of the stream. */
+enum { IN3_FEATURES, IN3_STATE_H, IN3_STATE_C, INPUT3_COUNT };
+enum { OUT3_NETWORK, OUT3_STATE_H, OUT3_STATE_C, OUTPUT3_COUNT };
+static const tensor_spec INPUT3_SPECS[INPUT3_COUNT] = {
+    {"network_input", 3, {DIM_DYNAMIC, DIM_DYNAMIC, DIM_FEATURES}, {"R", "T", "F"}},
+    {"state_in_h", 3, {DIM_LAYERS, DIM_DYNAMIC, DIM_STATE}, {"L", "R", "H / rows"}},
+    {"state_in_c", 3, {DIM_LAYERS, DIM_DYNAMIC, DIM_STATE}, {"L", "R", "H / rows"}},
+};
+static const tensor_spec OUTPUT3_SPECS[OUTPUT3_COUNT] = {
+    {"network_output", 3, {DIM_DYNAMIC, DIM_DYNAMIC, GEOMETRY_OUTPUTS}, {"R", "T", "149"}},
+    {"state_out_h", 3, {DIM_LAYERS, DIM_DYNAMIC, DIM_STATE}, {"L", "R", "H / rows"}},
+    {"state_out_c", 3, {DIM_LAYERS, DIM_DYNAMIC, DIM_STATE}, {"L", "R", "H / rows"}},
+};
+static const char *const INPUT3_NAMES[INPUT3_COUNT] = {"network_input", "state_in_h", "state_in_c"};
+static const char *const OUTPUT3_NAMES[OUTPUT3_COUNT] = {"network_output", "state_out_h",
+                                                         "state_out_c"};
+
 struct ort_model {
     OrtSession *session;
     OrtMemoryInfo *memory;
     ort_model_info info;
+    network_geometry geometry; /* contract 3 */
     char path[1024];
 };
 
@@ -249,7 +271,10 @@ struct ort_stream {
     float *block; /* one allocation for every buffer below */
     float *orientation, *acceleration, *mask, *rotations, *velocity, *contact;
     float *state_h[2], *state_c[2];
+    float *features, *network_output; /* contract 3: the graph's own input and output */
+    geometry_row *rows;               /* contract 3: [B][T][rows] */
     OrtValue *v_orientation, *v_acceleration, *v_mask, *v_rotations, *v_velocity, *v_contact;
+    OrtValue *v_features, *v_network_output;
     OrtValue *v_state_h[2], *v_state_c[2];
     const OrtValue *inputs[2][INPUT_COUNT];
     OrtValue *outputs[2][OUTPUT_COUNT];
@@ -407,6 +432,95 @@ static mocap_status parse_stride_scaling(ort_model_info *info, const char *path,
     return MOCAP_OK;
 }
 
+/* Contract 3's keys for the geometry the engine does (see docs/model-contract.md). */
+enum { GEO_SCALE, GEO_ANCHORS, GEO_MASKED, GEO_MIRROR, GEO_MIRROR_SENSORS, GEO_MIRROR_JOINTS,
+       GEO_KEY_COUNT };
+static const char *const GEOMETRY_KEYS[GEO_KEY_COUNT] = {
+    "mocap.acceleration_scale", "mocap.anchor_joints", "mocap.masked_features",
+    "mocap.mirror_average", "mocap.mirror_sensors", "mocap.mirror_joints"};
+
+/* A list of exactly `count` integers in lo..hi into out; a message names the key otherwise. */
+static mocap_status parse_int_list(const char *path, const char *key, char *text, int count,
+                                   int lo, int hi, int *out)
+{
+    char *items[GEOMETRY_JOINTS + 1];
+    int overflow = 0;
+    int n = split_list(text, items, GEOMETRY_JOINTS + 1, &overflow);
+    if (n != count || overflow)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s has %d entries, expected %d", path, key,
+                          n, count);
+    for (int i = 0; i < n; ++i) {
+        long v;
+        if (!parse_int(items[i], &v) || v < lo || v > hi)
+            return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s[%d] is '%s', expected an integer "
+                              "in %d..%d", path, key, i, items[i], lo, hi);
+        out[i] = (int)v;
+    }
+    return MOCAP_OK;
+}
+
+static mocap_status parse_flag(const char *path, const char *key, const char *text, int *out)
+{
+    if (strcmp(text, "0") == 0 || strcmp(text, "1") == 0) {
+        *out = text[0] == '1';
+        return MOCAP_OK;
+    }
+    return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s is '%s', expected 0 or 1", path, key, text);
+}
+
+/* Contract 3: what the geometry needs, from the keys (texts[GEO_*], NULL where absent). */
+static mocap_status parse_geometry(ort_model *m, char **texts)
+{
+    const char *path = m->path;
+    ort_model_info *info = &m->info;
+    const int n = info->sensor_count;
+    for (int k = 0; k < GEO_KEY_COUNT; ++k) {
+        if (texts[k] || k == GEO_MIRROR_SENSORS || k == GEO_MIRROR_JOINTS) continue;
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: metadata key '%s' is missing (contract 3 "
+                          "describes the geometry the engine does)", path, GEOMETRY_KEYS[k]);
+    }
+    double scale;
+    if (!parse_double(texts[GEO_SCALE], &scale) || !(scale > 0.0) || scale > 1e6)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.acceleration_scale '%s' is not a "
+                          "positive number", path, texts[GEO_SCALE]);
+    int masked = 0, mirror = 0;
+    mocap_status r = parse_flag(path, GEOMETRY_KEYS[GEO_MASKED], texts[GEO_MASKED], &masked);
+    if (r == MOCAP_OK) r = parse_flag(path, GEOMETRY_KEYS[GEO_MIRROR], texts[GEO_MIRROR], &mirror);
+    if (r != MOCAP_OK) return r;
+    int anchors[MOCAP_MAX_SENSORS], mirror_sensors[MOCAP_MAX_SENSORS], mirror_joints[GEOMETRY_JOINTS];
+    r = parse_int_list(path, GEOMETRY_KEYS[GEO_ANCHORS], texts[GEO_ANCHORS], n, 0,
+                       GEOMETRY_JOINTS - 1, anchors);
+    if (r != MOCAP_OK) return r;
+    if (mirror) {
+        for (int k = GEO_MIRROR_SENSORS; k <= GEO_MIRROR_JOINTS; ++k)
+            if (!texts[k])
+                return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.mirror_average is 1 but "
+                                  "metadata key '%s' is missing", path, GEOMETRY_KEYS[k]);
+        r = parse_int_list(path, GEOMETRY_KEYS[GEO_MIRROR_SENSORS], texts[GEO_MIRROR_SENSORS], n,
+                           0, n - 1, mirror_sensors);
+        if (r == MOCAP_OK)
+            r = parse_int_list(path, GEOMETRY_KEYS[GEO_MIRROR_JOINTS], texts[GEO_MIRROR_JOINTS],
+                               GEOMETRY_JOINTS, 0, GEOMETRY_JOINTS - 1, mirror_joints);
+        if (r != MOCAP_OK) return r;
+        if (info->state_size % 2 != 0)
+            return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.state_size %d is odd; with the "
+                              "mirror average it holds both rows' state", path, info->state_size);
+    }
+    const int32_t pelvis_segment = mocap_segment_find("pelvis");
+    int pelvis = -1;
+    for (int k = 0; k < n; ++k)
+        if (info->sensor_segments[k] == pelvis_segment) pelvis = k;
+    r = network_geometry_init(&m->geometry, n, pelvis, masked, mirror, (float)scale,
+                              mirror_sensors, mirror_joints, info->joint_parents, anchors);
+    if (r != MOCAP_OK) {
+        char why[512];
+        snprintf(why, sizeof why, "%s", mocap_last_error());
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s", path, why);
+    }
+    info->has_mask = masked;
+    return MOCAP_OK;
+}
+
 static mocap_status read_metadata(ort_model *m)
 {
     OrtModelMetadata *md = NULL;
@@ -421,6 +535,8 @@ static mocap_status read_metadata(ort_model *m)
     char *required = metadata_value(md, alloc, "mocap.sensor_required");
     char *training_height = metadata_value(md, alloc, "mocap.training_height");
     char *stride_exponent = metadata_value(md, alloc, "mocap.stride_exponent");
+    char *geometry[GEO_KEY_COUNT];
+    for (int k = 0; k < GEO_KEY_COUNT; ++k) geometry[k] = metadata_value(md, alloc, GEOMETRY_KEYS[k]);
     g_api->ReleaseModelMetadata(md);
     ort_model_info *info = &m->info;
     const char *path = m->path;
@@ -543,7 +659,9 @@ static mocap_status read_metadata(ort_model *m)
     snprintf(info->precision, sizeof info->precision, "%s", values[8]);
     snprintf(info->model_name, sizeof info->model_name, "%s", values[9]);
     r = parse_stride_scaling(info, path, training_height, stride_exponent);
+    if (r == MOCAP_OK && info->contract_version >= 3) r = parse_geometry(m, geometry);
 done:
+    for (int k = 0; k < GEO_KEY_COUNT; ++k) free(geometry[k]);
     for (int k = 0; k < KEY_COUNT; ++k) free(values[k]);
     free(required);
     free(training_height);
@@ -554,7 +672,32 @@ done:
 /* ---------------------------------------------------------------------------------------- */
 /* Input / output validation                                                                   */
 
-static int model_input_count(const ort_model *m) { return m->info.has_mask ? INPUT_COUNT : IN_MASK; }
+static int network_only(const ort_model *m) { return m->info.contract_version >= 3; }
+
+static int model_input_count(const ort_model *m)
+{
+    if (network_only(m)) return INPUT3_COUNT;
+    return m->info.has_mask ? INPUT_COUNT : IN_MASK;
+}
+static int model_output_count(const ort_model *m)
+{
+    return network_only(m) ? OUTPUT3_COUNT : OUTPUT_COUNT;
+}
+static const char *const *input_names(const ort_model *m)
+{
+    return network_only(m) ? INPUT3_NAMES : INPUT_NAMES;
+}
+static const char *const *output_names(const ort_model *m)
+{
+    return network_only(m) ? OUTPUT3_NAMES : OUTPUT_NAMES;
+}
+
+/* The state size of the graph's tensors: a contract-3 graph holds each row's own. */
+static int64_t graph_state_size(const ort_model *m)
+{
+    return network_only(m) ? m->info.state_size / network_geometry_rows(&m->geometry)
+                           : m->info.state_size;
+}
 
 static mocap_status check_tensor(const ort_model *m, const char *kind, const tensor_spec *spec,
                                  OrtTypeInfo *type)
@@ -593,8 +736,9 @@ static mocap_status check_tensor(const ort_model *m, const char *kind, const ten
     for (int d = 0; d < spec->rank; ++d) {
         int64_t want = spec->dims[d];
         if (want == DIM_LAYERS) want = m->info.state_layers;
-        else if (want == DIM_STATE) want = m->info.state_size;
+        else if (want == DIM_STATE) want = graph_state_size(m);
         else if (want == DIM_SENSORS) want = m->info.sensor_count;
+        else if (want == DIM_FEATURES) want = m->geometry.features;
         if (want == DIM_DYNAMIC) {
             if (dims[d] >= 0)
                 return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s '%s' dimension %d (%s) is fixed "
@@ -603,10 +747,12 @@ static mocap_status check_tensor(const ort_model *m, const char *kind, const ten
         } else if (dims[d] < 0) {
             /* Left symbolic in the file (exporters often do): checked by the probe run. */
         } else if (dims[d] != want) {
-            const char *which = spec->dims[d] == DIM_LAYERS    ? " (mocap.state_layers)"
-                                : spec->dims[d] == DIM_STATE   ? " (mocap.state_size)"
-                                : spec->dims[d] == DIM_SENSORS ? " (mocap.sensor_order)"
-                                                               : "";
+            const char *which = spec->dims[d] == DIM_LAYERS     ? " (mocap.state_layers)"
+                                : spec->dims[d] == DIM_STATE    ? " (mocap.state_size)"
+                                : spec->dims[d] == DIM_SENSORS  ? " (mocap.sensor_order)"
+                                : spec->dims[d] == DIM_FEATURES ? " (the features of "
+                                                                  "mocap.sensor_order)"
+                                                                : "";
             return mocap_fail(MOCAP_ERR_FORMAT, "model %s: %s '%s' dimension %d (%s) is %lld, the "
                               "contract needs %lld%s (shape %s)", path, kind, spec->name, d,
                               spec->dim_names[d], (long long)dims[d], (long long)want, which,
@@ -619,8 +765,9 @@ static mocap_status check_tensor(const ort_model *m, const char *kind, const ten
 static mocap_status check_io(ort_model *m, int outputs)
 {
     const char *kind = outputs ? "output" : "input";
-    const tensor_spec *specs = outputs ? OUTPUT_SPECS : INPUT_SPECS;
-    int nspec = outputs ? OUTPUT_COUNT : model_input_count(m);
+    const tensor_spec *specs = network_only(m) ? (outputs ? OUTPUT3_SPECS : INPUT3_SPECS)
+                                               : (outputs ? OUTPUT_SPECS : INPUT_SPECS);
+    int nspec = outputs ? model_output_count(m) : model_input_count(m);
     OrtAllocator *alloc = NULL;
     size_t count = 0;
     OrtStatus *st = g_api->GetAllocatorWithDefaultOptions(&alloc);
@@ -645,7 +792,7 @@ static mocap_status check_io(ort_model *m, int outputs)
         len += (size_t)snprintf(all + len, sizeof all - len, "%s%s", i ? ", " : "", names[i]);
 
     /* A missing name first (the most useful message), then an unexpected one, then types. */
-    int index_of[(int)OUTPUT_COUNT > (int)INPUT_COUNT ? (int)OUTPUT_COUNT : (int)INPUT_COUNT];
+    int index_of[16];
     for (int k = 0; k < nspec; ++k) {
         index_of[k] = -1;
         for (size_t i = 0; i < listed; ++i)
@@ -820,6 +967,8 @@ done:
     return r;
 }
 
+static mocap_status probe_stream(ort_model *m);
+
 void ort_model_close(ort_model *m)
 {
     if (!m) return;
@@ -890,7 +1039,7 @@ mocap_status ort_model_open(const char *path, const ort_options *options, ort_mo
     r = read_metadata(m);
     if (r == MOCAP_OK) r = check_io(m, 0);
     if (r == MOCAP_OK) r = check_io(m, 1);
-    if (r == MOCAP_OK) r = probe_run(m);
+    if (r == MOCAP_OK) r = network_only(m) ? probe_stream(m) : probe_run(m);
     if (r != MOCAP_OK) goto fail;
     g_api->ReleaseSessionOptions(so);
     *out = m;
@@ -909,11 +1058,13 @@ const ort_model_info *ort_model_get_info(const ort_model *m) { return m ? &m->in
 void ort_stream_destroy(ort_stream *s)
 {
     if (!s) return;
-    OrtValue *values[] = {s->v_orientation, s->v_acceleration, s->v_mask,       s->v_rotations,
-                          s->v_velocity,    s->v_contact,      s->v_state_h[0], s->v_state_h[1],
-                          s->v_state_c[0],  s->v_state_c[1]};
+    OrtValue *values[] = {s->v_orientation, s->v_acceleration,   s->v_mask,
+                          s->v_rotations,   s->v_velocity,       s->v_contact,
+                          s->v_features,    s->v_network_output, s->v_state_h[0],
+                          s->v_state_h[1],  s->v_state_c[0],     s->v_state_c[1]};
     for (size_t i = 0; i < sizeof values / sizeof values[0]; ++i)
         if (values[i]) g_api->ReleaseValue(values[i]);
+    free(s->rows);
     free(s->block);
     free(s);
 }
@@ -945,9 +1096,14 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
     const size_t N = (size_t)m->info.sensor_count;
     size_t n_ori = bt * N * 9, n_acc = bt * N * 3, n_mask = m->info.has_mask ? bt * N : 0;
     size_t n_rot = bt * ORT_JOINTS * 9, n_vel = bt * 3, n_con = bt * 2;
-    size_t total = n_ori + n_acc + n_mask + n_rot + n_vel + n_con + 4 * s->state_count;
+    const int rows = network_only(m) ? network_geometry_rows(&m->geometry) : 0;
+    size_t n_feat = bt * (size_t)rows * (size_t)m->geometry.features;
+    size_t n_net = bt * (size_t)rows * GEOMETRY_OUTPUTS;
+    size_t total = n_ori + n_acc + n_mask + n_rot + n_vel + n_con + n_feat + n_net + 4 * s->state_count;
     s->block = (float *)calloc(total, sizeof(float));
-    if (!s->block) {
+    if (rows) s->rows = (geometry_row *)calloc(bt * (size_t)rows, sizeof *s->rows);
+    if (!s->block || (rows && !s->rows)) {
+        free(s->block);
         free(s);
         return mocap_fail(MOCAP_ERR_NO_MEMORY, "ort_stream_create: %zu floats", total);
     }
@@ -958,6 +1114,8 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
     s->rotations = p; p += n_rot;
     s->velocity = p; p += n_vel;
     s->contact = p; p += n_con;
+    s->features = n_feat ? p : NULL; p += n_feat;
+    s->network_output = n_net ? p : NULL; p += n_net;
     for (int k = 0; k < 2; ++k) {
         s->state_h[k] = p; p += s->state_count;
         s->state_c[k] = p; p += s->state_count;
@@ -967,15 +1125,24 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
     const int64_t sh_mask[3] = {B, T, (int64_t)N};
     const int64_t sh_rot[5] = {B, T, ORT_JOINTS, 3, 3}, sh_vel[3] = {B, T, 3}, sh_con[3] = {B, T, 2};
     const int64_t sh_state[3] = {L, B, H};
-    OrtStatus *st = wrap(s, s->orientation, n_ori, sh_ori, 5, &s->v_orientation);
-    if (!st) st = wrap(s, s->acceleration, n_acc, sh_acc, 4, &s->v_acceleration);
-    if (!st && s->mask) st = wrap(s, s->mask, n_mask, sh_mask, 3, &s->v_mask);
-    if (!st) st = wrap(s, s->rotations, n_rot, sh_rot, 5, &s->v_rotations);
-    if (!st) st = wrap(s, s->velocity, n_vel, sh_vel, 3, &s->v_velocity);
-    if (!st) st = wrap(s, s->contact, n_con, sh_con, 3, &s->v_contact);
+    const int64_t R = B * rows, sh_feat[3] = {R, T, m->geometry.features};
+    const int64_t sh_net[3] = {R, T, GEOMETRY_OUTPUTS}, sh_state3[3] = {L, R, rows ? H / rows : 0};
+    OrtStatus *st = NULL;
+    if (rows) { /* the graph sees only the network's tensors */
+        st = wrap(s, s->features, n_feat, sh_feat, 3, &s->v_features);
+        if (!st) st = wrap(s, s->network_output, n_net, sh_net, 3, &s->v_network_output);
+    } else {
+        st = wrap(s, s->orientation, n_ori, sh_ori, 5, &s->v_orientation);
+        if (!st) st = wrap(s, s->acceleration, n_acc, sh_acc, 4, &s->v_acceleration);
+        if (!st && s->mask) st = wrap(s, s->mask, n_mask, sh_mask, 3, &s->v_mask);
+        if (!st) st = wrap(s, s->rotations, n_rot, sh_rot, 5, &s->v_rotations);
+        if (!st) st = wrap(s, s->velocity, n_vel, sh_vel, 3, &s->v_velocity);
+        if (!st) st = wrap(s, s->contact, n_con, sh_con, 3, &s->v_contact);
+    }
+    const int64_t *state_shape = rows ? sh_state3 : sh_state;
     for (int k = 0; k < 2 && !st; ++k) {
-        st = wrap(s, s->state_h[k], s->state_count, sh_state, 3, &s->v_state_h[k]);
-        if (!st) st = wrap(s, s->state_c[k], s->state_count, sh_state, 3, &s->v_state_c[k]);
+        st = wrap(s, s->state_h[k], s->state_count, state_shape, 3, &s->v_state_h[k]);
+        if (!st) st = wrap(s, s->state_c[k], s->state_count, state_shape, 3, &s->v_state_c[k]);
     }
     if (st) {
         mocap_status r = ort_error(st, MOCAP_ERR_NO_MEMORY, "creating tensors", NULL);
@@ -984,6 +1151,15 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
     }
     for (int k = 0; k < 2; ++k) {
         /* Parity k reads state pair k and writes pair 1 - k. */
+        if (rows) {
+            s->inputs[k][IN3_FEATURES] = s->v_features;
+            s->inputs[k][IN3_STATE_H] = s->v_state_h[k];
+            s->inputs[k][IN3_STATE_C] = s->v_state_c[k];
+            s->outputs[k][OUT3_NETWORK] = s->v_network_output;
+            s->outputs[k][OUT3_STATE_H] = s->v_state_h[1 - k];
+            s->outputs[k][OUT3_STATE_C] = s->v_state_c[1 - k];
+            continue;
+        }
         s->inputs[k][IN_ORIENTATION] = s->v_orientation;
         s->inputs[k][IN_ACCELERATION] = s->v_acceleration;
         s->inputs[k][IN_STATE_H] = s->v_state_h[k];
@@ -1020,16 +1196,74 @@ void ort_stream_reset_state(ort_stream *s)
     }
 }
 
+/* Contract 3, before the run: every character's frames -> the graph's rows of features. */
+static void stream_features(ort_stream *s)
+{
+    const network_geometry *g = &s->model->geometry;
+    const int rows = network_geometry_rows(g), T = s->frames, N = g->sensors;
+    const size_t row_stride = (size_t)T * (size_t)g->features;
+    for (int b = 0; b < s->batch; ++b)
+        for (int t = 0; t < T; ++t) {
+            const size_t f = (size_t)b * (size_t)T + (size_t)t;
+            network_geometry_features(g, s->orientation + f * (size_t)N * 9,
+                                      s->acceleration + f * (size_t)N * 3,
+                                      s->mask ? s->mask + f * (size_t)N : NULL,
+                                      s->features + (size_t)b * rows * row_stride +
+                                          (size_t)t * (size_t)g->features,
+                                      row_stride, s->rows + f * (size_t)rows);
+        }
+}
+
+/* Contract 3, after the run: the graph's rows -> every character's pose. */
+static void stream_outputs(ort_stream *s)
+{
+    const network_geometry *g = &s->model->geometry;
+    const int rows = network_geometry_rows(g), T = s->frames;
+    const size_t row_stride = (size_t)T * GEOMETRY_OUTPUTS;
+    for (int b = 0; b < s->batch; ++b)
+        for (int t = 0; t < T; ++t) {
+            const size_t f = (size_t)b * (size_t)T + (size_t)t;
+            network_geometry_outputs(g, s->network_output + (size_t)b * rows * row_stride +
+                                            (size_t)t * GEOMETRY_OUTPUTS,
+                                     row_stride, s->rows + f * (size_t)rows,
+                                     s->rotations + f * ORT_JOINTS * 9, s->velocity + f * 3,
+                                     s->contact + f * 2);
+        }
+}
+
 mocap_status ort_stream_run(ort_stream *s)
 {
     if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "ort_stream_run: no stream");
     const int k = s->parity;
-    OrtStatus *st = g_api->Run(s->model->session, NULL, INPUT_NAMES, s->inputs[k],
-                               (size_t)model_input_count(s->model), OUTPUT_NAMES, OUTPUT_COUNT,
-                               s->outputs[k]);
-    if (st) return ort_error(st, MOCAP_ERR_IO, ": inference failed", s->model->path);
+    const ort_model *m = s->model;
+    if (network_only(m)) stream_features(s);
+    OrtStatus *st = g_api->Run(m->session, NULL, input_names(m), s->inputs[k],
+                               (size_t)model_input_count(m), output_names(m),
+                               (size_t)model_output_count(m), s->outputs[k]);
+    if (st) return ort_error(st, MOCAP_ERR_IO, ": inference failed", m->path);
+    if (network_only(m)) stream_outputs(s);
     s->parity = 1 - k;
     return MOCAP_OK;
+}
+
+/* Contract 3's probe: one frame of a still T-pose through a stream, which binds every tensor at
+ * the shape the contract gives it, so a graph that answers another shape fails here. */
+static mocap_status probe_stream(ort_model *m)
+{
+    ort_stream *s = NULL;
+    mocap_status r = ort_stream_create(m, 1, 1, &s);
+    if (r != MOCAP_OK) return r;
+    for (int k = 0; k < m->info.sensor_count; ++k) {
+        s->orientation[k * 9 + 0] = s->orientation[k * 9 + 4] = s->orientation[k * 9 + 8] = 1.0f;
+        if (s->mask) s->mask[k] = 1.0f;
+    }
+    stream_features(s);
+    const int k = s->parity;
+    OrtStatus *st = g_api->Run(m->session, NULL, INPUT3_NAMES, s->inputs[k], INPUT3_COUNT,
+                               OUTPUT3_NAMES, OUTPUT3_COUNT, s->outputs[k]);
+    if (st) r = ort_error(st, MOCAP_ERR_FORMAT, ": a one-frame test inference failed", m->path);
+    ort_stream_destroy(s);
+    return r;
 }
 
 #endif /* MOCAP_HAVE_ONNXRUNTIME */

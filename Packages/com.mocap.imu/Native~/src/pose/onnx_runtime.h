@@ -27,10 +27,11 @@
 extern "C" {
 #endif
 
-/* Contract versions this engine reads: 1 (the six default sensors, no mask) and 2 (the model's
- * own sensor list from the segment table, with a mask input). */
+/* Contract versions this engine reads: 1 (the six default sensors, no mask), 2 (the model's
+ * own sensor list from the segment table, with a mask input) and 3 (the learned network alone,
+ * its geometry done by the engine: network_geometry.h; same stream interface). */
 #define ORT_CONTRACT_MIN 1
-#define ORT_CONTRACT_MAX 2
+#define ORT_CONTRACT_MAX 3
 #define ORT_JOINTS 24
 #define ORT_NAME_CAP 32
 
@@ -78,7 +79,7 @@ typedef struct ort_model_info {
     int sensor_count;                        /* N: the sensor dimension of the inputs */
     int32_t sensor_segments[MOCAP_MAX_SENSORS];
     uint32_t required_mask;                  /* bit k: sensor k must be present */
-    int has_mask;                            /* contract 2: the imu_mask input */
+    int has_mask;                            /* contract 2, or 3 with masked features: the mask */
     /* Optional (has_stride_scaling 0 when the model gives neither): the standing height of the
      * body the model learned, metres, and how its root speed follows a performer's size. */
     int has_stride_scaling;

@@ -701,7 +701,7 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
     s->L = info->state_layers;
     s->H = info->state_size;
     s->sensors = (int)info->sensor_count;
-    s->with_mask = info->contract_version >= 2;
+    s->with_mask = model_has_mask(model);
     s->period_ns = (int64_t)(1e9 / info->frame_rate);
     s->drift.dt = 1.0 / info->frame_rate;
     s->smoothing.dt = 1.0 / info->frame_rate;

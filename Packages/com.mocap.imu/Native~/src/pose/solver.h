@@ -24,6 +24,8 @@ extern "C" {
 /* model.c */
 ort_model *model_ort(mocap_model *model);
 const mocap_model_info *model_info(const mocap_model *model);
+/* 1 when the model reads which sensors are present (contract 2, or 3 with masked features). */
+int model_has_mask(const mocap_model *model);
 
 /* A calibrated frame as the inputs of a model with `sensors` sensors: model sensor k is the
  * frame's sensor slot_of[k] (-1: none). orientation [N][3][3] (bone -> model, row-major) from
