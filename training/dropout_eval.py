@@ -843,14 +843,16 @@ def main(args=None) -> int:
     if left_out:
         notes.append(f"The capture has {len(sensors)} sensors ({', '.join(sensors)}); the model's "
                      f"{', '.join(left_out)} is absent throughout (masked).")
-    if contract >= 2:
-        notes.append("The model is of contract 2: the engine holds a silent sensor's last sample "
-                     "briefly, then feeds it masked (imu_mask 0, zero inputs) until it returns; a "
-                     "silent pelvis keeps its held value (every model reads the body in its frame).")
-    if contract == 1:
-        notes.append("The model is of contract 1 (no `imu_mask`): the engine feeds a silent "
-                     "sensor's last held orientation and acceleration until it returns (a contract 2 "
-                     "model would get it masked, its inputs zero).")
+    from .ort import model_info as read_model_info
+    if read_model_info(model).get("imu_mask"):
+        notes.append(f"The model (contract {contract}) reads the mask: the engine holds a silent "
+                     "sensor's last sample briefly, then feeds it masked (imu_mask 0, zero inputs) "
+                     "until it returns; a silent pelvis keeps its held value (every model reads the "
+                     "body in its frame).")
+    else:
+        notes.append(f"The model (contract {contract}) reads no mask: the engine feeds a silent "
+                     "sensor's last held orientation and acceleration until it returns (a model "
+                     "with the mask would get it masked, its inputs zero).")
     meta = {"gap_s": args.seconds, "clips": len(motions), "source": source,
             "seconds": sum(m.num_frames / m.fps for m in motions), "model": _shown(model),
             "contract": contract, "command": command.strip(), "elapsed_s": time.monotonic() - started,

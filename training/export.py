@@ -412,6 +412,10 @@ def export(net: PoseNet, out_dir=DEFAULT_OUT, model_name: str = "mocap-pose", ch
 
 
 def main(args) -> int:
+    if getattr(args, "geometry", None) == "engine" and not getattr(args, "out", None):
+        raise UsageError(f"--geometry engine needs --out: the files in {DEFAULT_OUT.relative_to(REPO)} "
+                         "are the complete graphs (contract 1) other runtimes can run; the network "
+                         "alone goes to quantize from another folder; nothing written")
     if getattr(args, "untrained", False):
         net = untrained_model(seed=getattr(args, "seed", 0))
         name = "mocap-pose untrained (random init, seed %d)" % getattr(args, "seed", 0)

@@ -56,6 +56,8 @@ MIN_WEIGHT_DIM = 16
 CHECK_TOLERANCE = 0.05
 CHECKED_OUTPUT = "joint_rotations"
 QUANTIZED_OPS = ("MatMul", "LSTM")
+# The shipped int8 file holds the network alone, the engine doing its geometry (results/int8.md).
+SHIPPED_CONTRACT = "3"
 
 
 class QuantizeCheckError(CommandError):
@@ -429,6 +431,14 @@ def main(args) -> int:
     dst = Path(args.out or DEFAULT_OUT)
     if getattr(args, "measure", False):
         return measure_main(args, src, dst)
+    from .files import same_file
+    if same_file(dst, DEFAULT_OUT) and src.is_file() and \
+            onnx_metadata.read(load_onnx(src)).get("mocap.contract_version") != SHIPPED_CONTRACT:
+        raise UsageError(f"{src} is a complete graph; the shipped int8 file is the network alone "
+                         f"(model contract {SHIPPED_CONTRACT}): export --checkpoint "
+                         f"training/checkpoints/mocap_pose.pt --geometry engine --stride-from {src} "
+                         f"--out DIR, then quantize --model DIR/mocap_pose_fp32.onnx (or pass --out "
+                         f"elsewhere); nothing written")
     print(f"quantize: {src} -> {dst} ...", flush=True)
     ops = ("LSTM",) if args.float_matmuls else QUANTIZED_OPS
     info = quantize_file(src, dst, check=not args.no_check, ops=ops)

@@ -13,6 +13,7 @@ from training.quantize import quantize_model
 
 SIX = ("pelvis", "left_wrist", "right_wrist", "left_shin", "right_shin", "head")
 SEVEN = SIX + ("chest",)
+SHUFFLED = ("head", "right_wrist", "chest", "pelvis", "left_shin", "left_wrist", "right_shin")
 
 
 def _needs_onnx_runtime():
@@ -44,9 +45,11 @@ def _inputs(sensors, masked: bool, seed: int = 0):
         return ori, acc, None
     mask = np.ones(ori.shape[:3], np.float32)
     t = ori.shape[1]
-    mask[1, :, len(sensors) - 1] = 0                      # an optional sensor never there
-    mask[1, t // 3:(2 * t) // 3, 1] = 0                   # a wrist missing for a while
-    mask[0, t // 2:, 3] = 0                               # a shin gone for good
+    k = sensors.index
+    mask[1, :, k("chest")] = 0                            # the optional sensor never there
+    mask[1, t // 3:(2 * t) // 3, k("left_wrist")] = 0     # a wrist missing for a while
+    mask[0, t // 2:, k("right_shin")] = 0                 # a shin gone for good
+    mask[0, t // 5:(2 * t) // 5, k("pelvis")] = 0         # even the pelvis
     return ori * mask[..., None, None], acc * mask[..., None], mask
 
 
@@ -59,6 +62,9 @@ CASES = {
                      wrist_anchor="forearm"), True, SEVEN),
     "seven sensors, masked, anchored, plain": (ModelConfig(embed=32, hidden=24, head=32, sensors=SEVEN, optional=("chest",),
                                                            masked=True, anchored=True), False, SEVEN),
+    "seven sensors, the pelvis fourth, masked, mirror-averaged":
+        (ModelConfig(embed=32, hidden=24, head=32, sensors=SHUFFLED, optional=("chest",), masked=True,
+                     anchored=True), True, SHUFFLED),
 }
 
 
@@ -158,3 +164,22 @@ def test_stride_law_is_taken_over_or_refused(tmp_path):
     meta = onnx_metadata.read(onnx.load(str(dst)))
     assert meta["mocap.training_height"] == "1.7" and meta["mocap.stride_exponent"] == "0.5"
     assert meta["mocap.contract_version"] == "3"
+
+
+def test_the_cli_keeps_each_kind_of_file_where_it_belongs(tmp_path, capsys):
+    """The shipped fp32/fp16 files are complete graphs and the shipped int8 file is the network
+    alone: `export --geometry engine` without --out, and `quantize` of a complete graph onto the
+    shipped int8 file, are refused before anything is written."""
+    from training.__main__ import main
+    from training import quantize as qz
+    before = qz.DEFAULT_OUT.stat().st_mtime_ns
+    assert main(["export", "--untrained", "--geometry", "engine"]) == 1
+    assert "--geometry engine needs --out" in capsys.readouterr().err
+    assert main(["quantize", "--model", str(qz.DEFAULT_MODEL), "--no-check"]) == 1
+    err = capsys.readouterr().err
+    assert "is a complete graph" in err and "--geometry engine" in err
+    assert qz.DEFAULT_OUT.stat().st_mtime_ns == before
+    # elsewhere, a complete graph quantises as before
+    out = tmp_path / "int8.onnx"
+    assert main(["quantize", "--model", str(qz.DEFAULT_MODEL), "--out", str(out), "--no-check"]) == 0
+    assert onnx_metadata.read(onnx.load(str(out)))["mocap.contract_version"] == "1"

@@ -38,15 +38,19 @@ engine. Six sensors, masked features (F = 6 x 12 + 5 x 12 + 6 = 138), the mirror
 rows per character), wrist sensors anchoring the hands; the graph's state is [L = 2, R, 2] (the
 metadata's state size 4 holds both rows):
 
-    network_output[r, t, :] = network_input[r, t, :] @ 0 + bias     (bias: 1 at the heading-frame
-                              root velocity z, +2 / -2 at the contact logits, 0 elsewhere)
+    network_output[r, t, :] = network_input[r, t, :] @ W + bias     (W: 1 from the pelvis'
+                              heading-frame acceleration x (feature 54) to the heading-frame root
+                              velocity x (output 144), 0 elsewhere; bias: 1 at the velocity z,
+                              +2 / -2 at the contact logits, 0 elsewhere)
     state_out_h             = state_in_h + 1
     state_out_c             = state_in_c
 
 so every residual is zero: the engine must answer the rest pose under the measured pelvis with
-the present hands turned as their sensors, the root velocity along the pelvis heading, contact
-0.5. `v3_missing_anchor_joints` lacks mocap.anchor_joints, `v3_wrong_features` reads the 132
-features of an unmasked network while declaring masked ones, `v3_bad_mirror_table` pairs the
+the present hands turned as their sensors, contact 0.5, and the root velocity Ry (x, 0, 1) with
+x = (Ry^T a_pelvis)_x / 30 of that character's frame (both rows of the mirror average agree on
+it, so a row or frame fed another's features shows). `v3_missing_anchor_joints` lacks mocap.anchor_joints, `v3_wrong_features` reads the 132
+features of an unmasked network while declaring masked ones, `v3_unmasked_optional` makes the
+head optional in a network without the mask, `v3_bad_mirror_table` pairs the
 left wrist with itself (so the right wrist pairs with the left one way only).
 
 `stride_scaled` is `valid` with the optional stride scaling (`mocap.training_height` 1.70,
@@ -85,7 +89,8 @@ VARIANTS = ["valid", "wrong_input_name", "wrong_rank", "missing_metadata", "miss
             "v2_chest", "v2_unknown_segment", "v2_required_length", "v2_missing_mask",
             "v2_wrong_sensor_dim", "v2_duplicate_segment", "int8_precision", "unknown_precision",
             "stride_scaled", "stride_height_only", "stride_bad_exponent", "v3_network",
-            "v3_missing_anchor_joints", "v3_wrong_features", "v3_bad_mirror_table"]
+            "v3_missing_anchor_joints", "v3_wrong_features", "v3_bad_mirror_table",
+            "v3_unmasked_optional"]
 MIRROR_JOINTS = [0, 2, 1, 3, 5, 4, 6, 8, 7, 9, 11, 10, 12, 14, 13, 15, 17, 16, 19, 18, 21, 20, 23, 22]
 
 
@@ -220,7 +225,9 @@ def build_v3(variant="v3_network"):
     ]
     bias = np.zeros(149, np.float32)
     bias[146], bias[147], bias[148] = 1.0, 2.0, -2.0
-    inits = [_const("weights", np.zeros((features, 149), np.float32), np.float32),
+    weights = np.zeros((features, 149), np.float32)
+    weights[54, 144] = 1.0
+    inits = [_const("weights", weights, np.float32),
              _const("bias", bias, np.float32), _const("one", np.float32(1.0), np.float32)]
     nodes = [
         helper.make_node("MatMul", ["network_input", "weights"], ["product"]),
@@ -233,6 +240,9 @@ def build_v3(variant="v3_network"):
                   mirror_joints=",".join(str(j) for j in MIRROR_JOINTS))
     if variant == "v3_missing_anchor_joints":
         md.pop("mocap.anchor_joints")
+    if variant == "v3_unmasked_optional":
+        md["mocap.masked_features"] = "0"
+        md["mocap.sensor_required"] = "1,1,1,1,1,0"
     if variant == "v3_bad_mirror_table":
         md["mocap.mirror_sensors"] = "0,1,1,4,3,5"
     return _model(nodes, inputs, outputs, inits, md)

@@ -149,7 +149,14 @@ TEST(NetworkGeometry, RefusesDescriptionsItCannotFollow)
     // the features of six sensors: 6 x 12 + 5 x 12, and the mask
     EXPECT_EQ(make(0, 0).features, 132);
     EXPECT_EQ(make(1, 1).features, 138);
-    EXPECT_EQ(network_geometry_rows(&g), 1);
+    const network_geometry plain = make(0, 0), mirrored = make(0, 1);
+    const int same_bone[kSensors] = {0, 22, 22, 4, 5, 0};  // the later sensor of a bone wins
+    const network_geometry shared = make(0, 0, same_bone);
+    ASSERT_EQ(shared.anchored, 3);
+    EXPECT_EQ(shared.anchor_joint[0], 22);
+    EXPECT_EQ(shared.anchor_sensor[0], 2);
+    EXPECT_EQ(network_geometry_rows(&plain), 1);
+    EXPECT_EQ(network_geometry_rows(&mirrored), 2);
 }
 
 TEST(NetworkGeometry, ZeroResidualsGiveTheRestPoseUnderTheMeasuredPelvis)

@@ -159,6 +159,7 @@ TEST(OnnxRuntime, ContractViolationsAreRefusedByName)
         {"v3_missing_anchor_joints.onnx", "'mocap.anchor_joints' is missing"},
         {"v3_wrong_features.onnx", "'network_input' dimension 2 (F) is 132, the contract needs 138"},
         {"v3_bad_mirror_table.onnx", "mirror sensor table: sensor 2 maps to 1"},
+        {"v3_unmasked_optional.onnx", "a network without the mask needs every sensor"},
     };
     for (const auto &c : cases) {
         Opened o;
@@ -304,6 +305,10 @@ TEST(OnnxRuntime, ContractThreeLeavesTheGeometryToTheEngine)
             }
         }
     std::memcpy(ort_stream_orientation(st), ori.data(), ori.size() * sizeof(float));
+    // each frame's own pelvis acceleration: the fixture passes its heading-frame x to the
+    // velocity, so a row or frame given another's features shows there
+    std::vector<float> acc = random_floats((size_t)B * T * 6 * 3, 77, 6.0f);
+    std::memcpy(ort_stream_acceleration(st), acc.data(), acc.size() * sizeof(float));
     float *mask = ort_stream_mask(st);
     ASSERT_NE(mask, nullptr);
     for (int i = 0; i < B * T * 6; ++i) mask[i] = 1.0f;
@@ -334,10 +339,15 @@ TEST(OnnxRuntime, ContractThreeLeavesTheGeometryToTheEngine)
                     EXPECT_NEAR(global[e], missing ? rot[e] : in[(1 + side) * 9 + e], 2e-5)
                         << "hand " << side << " of " << b << "," << t << (missing ? " (missing)" : "");
             }
+            // velocity Ry (x, 0, 1), x = (Ry^T a_pelvis)_x / 30
+            const double c = std::cos(yaw[b]), s = std::sin(yaw[b]);
+            const float *a = acc.data() + f * 18;
+            const double x = (c * a[0] - s * a[2]) / 30.0;
             const float *v = ort_stream_root_velocity(st) + f * 3;
-            EXPECT_NEAR(v[0], std::sin(yaw[b]), 1e-6);
+            EXPECT_NEAR(v[0], c * x + s, 1e-5) << b << "," << t;
             EXPECT_NEAR(v[1], 0.0f, 1e-6);
-            EXPECT_NEAR(v[2], std::cos(yaw[b]), 1e-6);
+            EXPECT_NEAR(v[2], -s * x + c, 1e-5) << b << "," << t;
+            EXPECT_GT(std::fabs(x), 1e-3);  // the signal is there to see
             const float *contact = ort_stream_foot_contact(st) + f * 2;
             EXPECT_NEAR(contact[0], 0.5f, 1e-6);  // left +2 and mirrored right -2 averaged
             EXPECT_NEAR(contact[1], 0.5f, 1e-6);
@@ -368,7 +378,7 @@ TEST(OnnxRuntime, ShippedInt8NetworkAnswersLikeTheCompleteFp32Model)
     ort_stream *a = nullptr, *b = nullptr;
     ASSERT_EQ(ort_stream_create(fp32.model, 1, 1, &a), MOCAP_OK);
     ASSERT_EQ(ort_stream_create(int8.model, 1, 1, &b), MOCAP_OK);
-    double worst = 0.0;
+    double worst = 0.0, worst_velocity = 0.0, worst_contact = 0.0;
     for (int t = 0; t < 30; ++t) {
         std::vector<float> acc = random_floats(18, 100 + t, 3.0f);
         for (ort_stream *s : {a, b}) {
@@ -382,9 +392,17 @@ TEST(OnnxRuntime, ShippedInt8NetworkAnswersLikeTheCompleteFp32Model)
         }
         for (int k = 0; k < 216; ++k)
             worst = std::fmax(worst, std::fabs(ort_stream_joint_rotations(a)[k] - ort_stream_joint_rotations(b)[k]));
+        for (int k = 0; k < 3; ++k)
+            worst_velocity = std::fmax(worst_velocity, std::fabs(ort_stream_root_velocity(a)[k] -
+                                                                 ort_stream_root_velocity(b)[k]));
+        for (int k = 0; k < 2; ++k)
+            worst_contact = std::fmax(worst_contact, std::fabs(ort_stream_foot_contact(a)[k] -
+                                                               ort_stream_foot_contact(b)[k]));
     }
     EXPECT_GT(worst, 0.0);   // quantised weights
     EXPECT_LT(worst, 0.05);  // the quantize check's bound
+    EXPECT_LT(worst_velocity, 0.05) << "m/s";
+    EXPECT_LT(worst_contact, 0.05);
     ort_stream_destroy(a);
     ort_stream_destroy(b);
 }

@@ -487,6 +487,10 @@ static mocap_status parse_geometry(ort_model *m, char **texts)
     mocap_status r = parse_flag(path, GEOMETRY_KEYS[GEO_MASKED], texts[GEO_MASKED], &masked);
     if (r == MOCAP_OK) r = parse_flag(path, GEOMETRY_KEYS[GEO_MIRROR], texts[GEO_MIRROR], &mirror);
     if (r != MOCAP_OK) return r;
+    if (!masked && info->required_mask != (1u << n) - 1u)
+        return mocap_fail(MOCAP_ERR_FORMAT, "model %s: mocap.sensor_required makes a sensor "
+                          "optional, but mocap.masked_features is 0: a network without the mask "
+                          "needs every sensor", path);
     int anchors[MOCAP_MAX_SENSORS], mirror_sensors[MOCAP_MAX_SENSORS], mirror_joints[GEOMETRY_JOINTS];
     r = parse_int_list(path, GEOMETRY_KEYS[GEO_ANCHORS], texts[GEO_ANCHORS], n, 0,
                        GEOMETRY_JOINTS - 1, anchors);
@@ -1103,6 +1107,7 @@ mocap_status ort_stream_create(ort_model *m, int batch, int frames, ort_stream *
     s->block = (float *)calloc(total, sizeof(float));
     if (rows) s->rows = (geometry_row *)calloc(bt * (size_t)rows, sizeof *s->rows);
     if (!s->block || (rows && !s->rows)) {
+        free(s->rows);
         free(s->block);
         free(s);
         return mocap_fail(MOCAP_ERR_NO_MEMORY, "ort_stream_create: %zu floats", total);
