@@ -850,9 +850,11 @@ def main(args=None) -> int:
                      "until it returns; a silent pelvis keeps its held value (every model reads the "
                      "body in its frame).")
     else:
-        notes.append(f"The model (contract {contract}) reads no mask: the engine feeds a silent "
-                     "sensor's last held orientation and acceleration until it returns (a model "
-                     "with the mask would get it masked, its inputs zero).")
+        notes.append(f"The model (contract {contract}) reads no mask: until a silent sensor "
+                     "returns, the engine feeds a shin or the head its bone as the model posed it "
+                     "in the frame before, at rest (zero acceleration), and a wrist or the pelvis "
+                     "its last held orientation and acceleration (a model with the mask would get "
+                     "it masked, its inputs zero).")
     meta = {"gap_s": args.seconds, "clips": len(motions), "source": source,
             "seconds": sum(m.num_frames / m.fps for m in motions), "model": _shown(model),
             "contract": contract, "command": command.strip(), "elapsed_s": time.monotonic() - started,

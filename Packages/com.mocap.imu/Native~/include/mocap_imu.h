@@ -546,8 +546,10 @@ typedef struct mocap_solver mocap_solver;
 MOCAP_API mocap_status mocap_solver_config_defaults(mocap_solver_config *config);
 /* config may be NULL. The model must stay open while the solver lives. A character's session
  * must carry every sensor the model requires (by segment; refused naming the missing segment);
- * a model's optional sensor the session lacks is always fed as missing. A contract-2 model gets
- * a mask: 1 for a sensor that is calibrated and fresh or holding, else 0 with zero inputs. */
+ * a model's optional sensor the session lacks is always fed as missing. A model with the mask
+ * (contract 2, or 3 with masked features) gets 1 for a sensor that is calibrated and fresh or
+ * holding, else 0 with zero inputs. A model without it is fed a silent shin or head as its bone
+ * in the model's previous pose, at rest, and a silent wrist or pelvis as its last sample. */
 MOCAP_API mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *config,
                                          mocap_solver **out);
 /* Before mocap_solver_start. The solver becomes the consumer of the session's frames (do not

@@ -29,6 +29,7 @@ extern "C" {
 #include "onnx_runtime.h"
 #include "platform.h"
 #include "skeleton_fk.h"
+#include "smpl_skeleton.h"
 #include "solver.h"
 }
 
@@ -104,7 +105,8 @@ mocap_status open_model(const std::string &path, mocap_model **out)
 // A short generated capture with a calibration prelude (2 s heading, 1 s strap, 2 s T-pose);
 // extra_chest adds a chest sensor on node 6 to the default six.
 synth_config short_capture(uint64_t seed, double motion_s, const char *motion,
-                           const std::string &path, bool extra_chest = false)
+                           const std::string &path, bool extra_chest = false,
+                           const std::vector<synth_silence> &silences = {})
 {
     synth_config cfg;
     synth_config_defaults(&cfg);
@@ -119,6 +121,7 @@ synth_config short_capture(uint64_t seed, double motion_s, const char *motion,
         cfg.node_ids[cfg.sensor_count] = 6;
         cfg.sensor_count++;
     }
+    for (const synth_silence &s : silences) cfg.silences[cfg.silence_count++] = s;
     EXPECT_EQ(synth_write_capture(&cfg, synth_builtin_motion(motion), nullptr, path.c_str(), nullptr),
               MOCAP_OK) << mocap_last_error();
     return cfg;
@@ -1630,4 +1633,113 @@ TEST_F(SolverOnShippedModel, ExtraSensorLeavesAContractOneModelUntouched)
         ASSERT_EQ(0, memcmp(a[i].root_position, b[i].root_position, sizeof a[i].root_position)) << i;
         ASSERT_EQ(a[i].flags, b[i].flags) << i;
     }
+}
+
+namespace {
+
+struct SilenceTap {
+    struct Fed {
+        int32_t state[MOCAP_MAX_SENSORS];
+        float orientation[MOCAP_MAX_SENSORS][9];
+        float acceleration[MOCAP_MAX_SENSORS][3];
+        float measured[MOCAP_MAX_SENSORS][9];  // the frame's own (held) orientation
+    };
+    std::map<uint64_t, Fed> fed;  // frame sequence -> what the model was fed
+};
+
+void silence_tap(void *user, int32_t, const mocap_frame *frame, const float *ori, const float *acc,
+                 const float *, int sensor_count)
+{
+    SilenceTap::Fed f;
+    for (int k = 0; k < sensor_count; ++k) {
+        f.state[k] = frame->sensors[k].state;
+        std::copy(ori + k * 9, ori + k * 9 + 9, f.orientation[k]);
+        std::copy(acc + k * 3, acc + k * 3 + 3, f.acceleration[k]);
+        double q[4], m[9];
+        for (int i = 0; i < 4; ++i) q[i] = frame->sensors[k].bone_orientation[i];
+        quat_normalize(q);
+        quat_to_mat3(m, q);
+        for (int i = 0; i < 9; ++i) f.measured[k][i] = (float)m[i];
+    }
+    static_cast<SilenceTap *>(user)->fed[frame->sequence] = f;
+}
+
+// The global rotation of joint j in a pose (joint 0 global, the others local).
+void pose_global(const mocap_pose &p, int j, double out[9])
+{
+    double q[4], local[9], parent[9];
+    for (int i = 0; i < 4; ++i) q[i] = p.joint_rotations[j][i];
+    quat_to_mat3(local, q);
+    if (j == 0) {
+        std::copy(local, local + 9, out);
+        return;
+    }
+    pose_global(p, smpl_joint_parent(j), parent);
+    mat3_multiply(out, parent, local);
+}
+
+}  // namespace
+
+// A model without the mask cannot be told a sensor is missing. A silent shin or head is fed its
+// bone as the model posed it in the frame before, at rest (zero acceleration); a silent wrist or
+// pelvis keeps its held sample; everything live is fed as measured.
+TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePose)
+{
+    std::string cap = test_temp_path("silences.cap");
+    synth_config cfg = short_capture(91, 3.0, "walk", cap, false,
+                                     {{MOCAP_SEGMENT_LEFT_SHIN, 1.0, 1.2},
+                                      {MOCAP_SEGMENT_HEAD, 1.0, 1.2},
+                                      {MOCAP_SEGMENT_RIGHT_WRIST, 1.0, 1.2}});
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));
+    ASSERT_NE(sessions.list[0], nullptr);
+    const mocap_solver_config sc = raw_output_config();
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, &sc, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
+    SilenceTap tap;
+    solver_set_input_tap(solver.s, silence_tap, &tap);
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
+    ASSERT_EQ(mocap_session_start(sessions.list[0]), MOCAP_OK);
+    std::vector<std::vector<mocap_pose>> poses;
+    ASSERT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    std::map<uint64_t, const mocap_pose *> by_frame;
+    for (const auto &p : poses[0]) by_frame[p.frame_sequence] = &p;
+
+    const int shin = 3, wrist = 2, head = 5;  // the default set's order
+    int silent_frames = 0, live_frames = 0;
+    for (const auto &kv : tap.fed) {
+        const SilenceTap::Fed &f = kv.second;
+        auto prev = by_frame.find(kv.first - 1);
+        for (int k = 0; k < 6; ++k) {
+            const bool silent = f.state[k] == MOCAP_SENSOR_SILENT;
+            if (!silent) {
+                ++live_frames;
+                for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], f.measured[k][i], 1e-6) << k;
+                continue;
+            }
+            ASSERT_TRUE(k == shin || k == head || k == wrist) << "sensor " << k << " went silent";
+            if (k == wrist) {  // held: its last sample, acceleration too
+                for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], f.measured[k][i], 1e-6);
+                continue;
+            }
+            ++silent_frames;
+            ASSERT_NE(prev, by_frame.end()) << "frame " << kv.first;
+            double g[9];
+            pose_global(*prev->second, k == shin ? 4 : 15, g);  // left knee -> ankle bone, head
+            for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], g[i], 1e-5) << "sensor " << k;
+            for (int i = 0; i < 3; ++i) ASSERT_EQ(f.acceleration[k][i], 0.0f);
+            // and not what it last measured: the body walked on
+        }
+    }
+    EXPECT_GT(silent_frames, 2 * 50);  // both, most of 1.2 s at 60 Hz
+    EXPECT_GT(live_frames, 6 * 100);
+    // the wrist's held acceleration is its last sample, not zero
+    bool wrist_accelerates = false;
+    for (const auto &kv : tap.fed)
+        if (kv.second.state[wrist] == MOCAP_SENSOR_SILENT)
+            wrist_accelerates |= std::fabs(kv.second.acceleration[wrist][0]) + std::fabs(kv.second.acceleration[wrist][1]) +
+                                     std::fabs(kv.second.acceleration[wrist][2]) > 0.0f;
+    EXPECT_TRUE(wrist_accelerates);
 }

@@ -61,6 +61,10 @@ typedef struct character {
     uint64_t pose_sequence;
     int have_last_pose;
     mocap_pose last_pose;
+    /* The global orientation of each model sensor's bone in the last model output: what a
+     * silent sensor is fed to a model without the mask (have_bones: there was an output). */
+    int have_bones;
+    float bone_rot[MOCAP_MAX_SENSORS][9];
 
     mocap_atomic_int ended;     /* the session ended and every pose was pushed */
     mocap_atomic_int reset_requested;
@@ -106,7 +110,7 @@ struct mocap_solver {
     int64_t tick_taken[MOCAP_MAX_CHARACTERS];
     int batch_index[MOCAP_MAX_CHARACTERS];     /* tick entry of batch slot b */
     int sensors;                /* N: the model's sensor count */
-    int with_mask;              /* contract 2: the model takes the mask */
+    int with_mask;              /* the model takes the mask (contract 2, or 3 with masked features) */
     float in_ori[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS * 9];
     float in_acc[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS * 3];
     float in_mask[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS];
@@ -399,10 +403,53 @@ static void hold_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t 
     emit_held(ch, &e, pose_stamp(ch, f, taken_ns), &s->pose);
 }
 
+/* Each model sensor's bone, globally, in the model output rot (joint 0 global, the others local). */
+static void keep_sensor_bones(const mocap_solver *s, character *ch, const float *rot)
+{
+    float global[MOCAP_JOINT_COUNT][9];
+    memcpy(global[0], rot, sizeof global[0]);
+    for (int j = 1; j < MOCAP_JOINT_COUNT; ++j) {
+        const float *a = global[s->info.joint_parents[j]], *b = rot + j * 9;
+        for (int r = 0; r < 3; ++r)
+            for (int k = 0; k < 3; ++k)
+                global[j][r * 3 + k] = a[r * 3] * b[k] + a[r * 3 + 1] * b[3 + k] + a[r * 3 + 2] * b[6 + k];
+    }
+    for (int k = 0; k < s->sensors; ++k) {
+        const int32_t joint = mocap_segment_joint(s->info.sensor_segments[k]);
+        if (joint >= 0 && joint < MOCAP_JOINT_COUNT) memcpy(ch->bone_rot[k], global[joint], sizeof ch->bone_rot[k]);
+    }
+    ch->have_bones = 1;
+}
+
+/* A model without the mask cannot be told a sensor is missing. A silent shin or head (or any
+ * sensor but the pelvis and the wrists) is fed its bone as the model posed it in the frame
+ * before, at rest, instead of its last sample, which stays put while the body moves on: legs and
+ * head follow the body, and the model's own guess of them is better than the stale sample (15
+ * validation clips, 5 s gaps: the silent bone's error 37-40 -> 16-18 deg for a shin, 54 -> 43 for
+ * the head; the pose's 10.3-10.5 -> 9.0-9.4 and 10.1 -> 9.7 deg). A hand moves on its own: fed
+ * the model's guess the arm wanders further (shoulders more often past 90 deg), so a wrist keeps
+ * its held sample. The pelvis always does: every other sensor is read against it. */
+static void stand_in_silent_sensors(const mocap_solver *s, const character *ch, const mocap_frame *f,
+                                    float *orientation, float *acceleration)
+{
+    if (!ch->have_bones) return;
+    for (int k = 0; k < s->sensors; ++k) {
+        const int slot = ch->slot_of[k];
+        if (slot < 0 || slot >= (int)f->sensor_count) continue;
+        const mocap_sensor_frame *sf = &f->sensors[slot];
+        if (sf->state != MOCAP_SENSOR_SILENT || sf->segment == MOCAP_SEGMENT_PELVIS ||
+            sf->segment == MOCAP_SEGMENT_LEFT_WRIST || sf->segment == MOCAP_SEGMENT_RIGHT_WRIST)
+            continue;
+        memcpy(orientation + k * 9, ch->bone_rot[k], 9 * sizeof(float));
+        memset(acceleration + k * 3, 0, 3 * sizeof(float));
+    }
+}
+
 static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns,
                        const float *rot, const float *vel, const float *contact)
 {
     character *ch = s->chars[c];
+    if (!s->with_mask) keep_sensor_bones(s, ch, rot);
     waiting_frame e;
     waiting_frame_of(&e, s, ch, f, taken_ns);
     for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, e.q[j]);
@@ -428,6 +475,7 @@ static void reset_character_state(mocap_solver *s, int32_t c)
     ch->drift.initialized = 0;
     pose_filter_reset(&ch->smoothing);
     ch->have_last_pose = 0;
+    ch->have_bones = 0;
 }
 
 /* Keeps a failed inference's status and text (mocap_last_error on this thread) for the stats:
@@ -471,6 +519,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
             hold_pose(s, c, frames[i], taken);
             continue;
         }
+        if (!s->with_mask) stand_in_silent_sensors(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb]);
         s->tick_taken[i] = taken;
         s->batch_index[nb++] = i;
     }
