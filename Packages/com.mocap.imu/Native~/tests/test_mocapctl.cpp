@@ -780,6 +780,8 @@ StreamArrivals receive_stream(const std::string &args_before_port, const std::st
 {
     StreamArrivals out;
     int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    int big = 4 << 20;  // room for a --fast burst while this thread waits for a core
+    if (fd >= 0) setsockopt(fd, SOL_SOCKET, SO_RCVBUF, (const char *)&big, sizeof big);
     sockaddr_in a{};
     a.sin_family = AF_INET;
     a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
@@ -839,7 +841,11 @@ TEST(Mocapctl, StreamPacesAReplayEvenlyByDefaultAndFastDoesNot)
 
     StreamArrivals fast = receive_stream("stream --vmc 127.0.0.1:", " --replay " + dir + "/s.cap --smoothing 0 --fast --rate 1000");
     ASSERT_EQ(fast.result.exit_code, 0) << fast.result.output;
-    ASSERT_EQ(fast.times.size(), sent) << fast.result.output;
+    ASSERT_TRUE(std::regex_search(fast.result.output, m, std::regex("(\\d+) bundles sent"))) << fast.result.output;
+    ASSERT_EQ(std::stoul(m[1]), sent) << fast.result.output;
+    // A burst over UDP may lose a few datagrams when the receiving thread waits for a core on a
+    // busy machine (seen: 160 of 166); the paced run above must lose none.
+    ASSERT_GE(fast.times.size(), sent * 9 / 10) << fast.result.output;
     EXPECT_LT(fast.times.back() - fast.times.front(), span / 2) << "--fast does not wait for the pace";
 
     CommandResult both = run_command("stream --vmc 127.0.0.1:9 --replay " + dir + "/s.cap --fast --speed 2");
