@@ -847,14 +847,16 @@ def main(args=None) -> int:
     if read_model_info(model).get("imu_mask"):
         notes.append(f"The model (contract {contract}) reads the mask: the engine holds a silent "
                      "sensor's last sample briefly, then feeds it masked (imu_mask 0, zero inputs) "
-                     "until it returns; a silent pelvis keeps its held value (every model reads the "
-                     "body in its frame).")
+                     "until it returns.")
     else:
         notes.append(f"The model (contract {contract}) reads no mask: until a silent sensor "
                      "returns, the engine feeds a shin or the head its bone as the model posed it "
-                     "in the frame before, at rest (zero acceleration), and a wrist or the pelvis "
-                     "its last held orientation and acceleration (a model with the mask would get "
-                     "it masked, its inputs zero).")
+                     "in the frame before, at rest (zero acceleration), and a wrist its last held "
+                     "orientation and acceleration (a model with the mask would get it masked, its "
+                     "inputs zero).")
+    notes.append("A silent pelvis is never masked (every model reads the body in its frame): it is "
+                 "fed its last sample turned about the vertical by the shins' mean heading change "
+                 "since it was last live, at rest (zero acceleration).")
     meta = {"gap_s": args.seconds, "clips": len(motions), "source": source,
             "seconds": sum(m.num_frames / m.fps for m in motions), "model": _shown(model),
             "contract": contract, "command": command.strip(), "elapsed_s": time.monotonic() - started,

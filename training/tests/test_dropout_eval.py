@@ -215,6 +215,7 @@ def test_a_short_run_through_mocapctl_has_the_gap_where_it_was_put(tmp_path):
     assert "python3 -m training missing-sensor --procedural --clips 1 --clip-seconds 10 --seconds 2" in text
     # the default model (contract 3, no masked features) gets a silent sensor's held values
     assert "(contract 3) reads no mask" in text and "as the model posed it" in text
+    assert "turned about the vertical by the shins' mean heading change" in text
     assert re.search(r"^\| none \| [\d.]+ \|", text, re.M), text
     row = re.search(r"^\| right_wrist \| ([\d.]+) \| .*\| (\d+) \((\d+)\) \| ([\d.]+|never) / ", text, re.M)
     assert row, text

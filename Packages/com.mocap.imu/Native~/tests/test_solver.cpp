@@ -1664,6 +1664,26 @@ void silence_tap(void *user, int32_t, const mocap_frame *frame, const float *ori
     static_cast<SilenceTap *>(user)->fed[frame->sequence] = f;
 }
 
+// The raw poses of one replay, every model input reported to tap.
+std::vector<mocap_pose> solve_replay_tapped(mocap_model *model, const std::string &cap,
+                                            const synth_config &cfg, SilenceTap &tap)
+{
+    Sessions sessions;
+    sessions.list.push_back(open_replay(cap, cfg));
+    if (!sessions.list[0]) return {};
+    const mocap_solver_config sc = raw_output_config();
+    Solver solver;
+    EXPECT_EQ(mocap_solver_open(model, &sc, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    EXPECT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
+    solver_set_input_tap(solver.s, silence_tap, &tap);
+    EXPECT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
+    EXPECT_EQ(mocap_session_start(sessions.list[0]), MOCAP_OK);
+    std::vector<std::vector<mocap_pose>> poses;
+    EXPECT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    return poses.empty() ? std::vector<mocap_pose>{} : poses[0];
+}
+
 // The global rotation of joint j in a pose (joint 0 global, the others local).
 void pose_global(const mocap_pose &p, int j, double out[9])
 {
@@ -1690,20 +1710,9 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
                                      {{MOCAP_SEGMENT_LEFT_SHIN, 1.0, 1.2},
                                       {MOCAP_SEGMENT_HEAD, 1.0, 1.2},
                                       {MOCAP_SEGMENT_RIGHT_WRIST, 1.0, 1.2}});
-    Sessions sessions;
-    sessions.list.push_back(open_replay(cap, cfg));
-    ASSERT_NE(sessions.list[0], nullptr);
-    const mocap_solver_config sc = raw_output_config();
-    Solver solver;
-    ASSERT_EQ(mocap_solver_open(model.m, &sc, &solver.s), MOCAP_OK) << mocap_last_error();
-    int32_t ch = -1;
-    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK);
     SilenceTap tap;
-    solver_set_input_tap(solver.s, silence_tap, &tap);
-    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
-    ASSERT_EQ(mocap_session_start(sessions.list[0]), MOCAP_OK);
-    std::vector<std::vector<mocap_pose>> poses;
-    ASSERT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    std::vector<std::vector<mocap_pose>> poses(1, solve_replay_tapped(model.m, cap, cfg, tap));
+    ASSERT_FALSE(poses[0].empty());
     std::map<uint64_t, const mocap_pose *> by_frame;
     for (const auto &p : poses[0]) by_frame[p.frame_sequence] = &p;
 
@@ -1742,4 +1751,45 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
             wrist_accelerates |= std::fabs(kv.second.acceleration[wrist][0]) + std::fabs(kv.second.acceleration[wrist][1]) +
                                      std::fabs(kv.second.acceleration[wrist][2]) > 0.0f;
     EXPECT_TRUE(wrist_accelerates);
+}
+
+// A silent pelvis is every model's frame of reference: it is fed its last sample turned about
+// the vertical by the shins' mean heading change since it was last live, at rest.
+TEST_F(SolverOnShippedModel, ASilentPelvisTurnsWithTheShins)
+{
+    std::string cap = test_temp_path("pelvis_silence.cap");
+    synth_config cfg = short_capture(92, 4.0, "turn", cap, false, {{MOCAP_SEGMENT_PELVIS, 1.0, 2.0}});
+    SilenceTap tap;
+    ASSERT_FALSE(solve_replay_tapped(model.m, cap, cfg, tap).empty());
+
+    auto heading = [](const float *m) { return std::atan2(m[2] - m[5] * m[1], m[8] - m[5] * m[7]); };
+    const int pelvis = 0, shins[2] = {3, 4};
+    double ref[2] = {0, 0};
+    int silent = 0;
+    double largest_turn = 0.0;
+    for (const auto &kv : tap.fed) {
+        const SilenceTap::Fed &f = kv.second;
+        if (f.state[pelvis] != MOCAP_SENSOR_SILENT) {
+            for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[pelvis][i], f.measured[pelvis][i], 1e-6);
+            for (int s = 0; s < 2; ++s) ref[s] = heading(f.orientation[shins[s]]);
+            continue;
+        }
+        ++silent;
+        double sx = 0, cx = 0;
+        for (int s = 0; s < 2; ++s) {
+            const double d = heading(f.orientation[shins[s]]) - ref[s];
+            sx += std::sin(d);
+            cx += std::cos(d);
+        }
+        const double d = std::atan2(sx, cx);
+        largest_turn = std::max(largest_turn, std::fabs(d));
+        double ry[9], held[9], want[9];
+        mat3_rotation_y(ry, d);
+        for (int i = 0; i < 9; ++i) held[i] = f.measured[pelvis][i];
+        mat3_multiply(want, ry, held);
+        for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[pelvis][i], want[i], 2e-4) << kv.first;
+        for (int i = 0; i < 3; ++i) ASSERT_EQ(f.acceleration[pelvis][i], 0.0f);
+    }
+    EXPECT_GT(silent, 90);                   // most of 2 s at 60 Hz
+    EXPECT_GT(largest_turn, 20.0 * 3.14159265358979 / 180.0) << "the performer turned while the pelvis was silent";
 }
