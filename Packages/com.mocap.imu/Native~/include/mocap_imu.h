@@ -549,7 +549,8 @@ MOCAP_API mocap_status mocap_solver_config_defaults(mocap_solver_config *config)
  * a model's optional sensor the session lacks is always fed as missing. A model with the mask
  * (contract 2, or 3 with masked features) gets 1 for a sensor that is calibrated and fresh or
  * holding, else 0 with zero inputs. A model without it is fed a silent shin or head as its bone
- * in the model's previous pose, at rest, and a silent wrist as its last sample. A silent pelvis
+ * in the model's previous pose, at rest, and a silent wrist as its last sample turned about the
+ * vertical as far as the pelvis turned since. A silent pelvis
  * (never masked: every model reads the body in its frame) is fed its last sample turned about
  * the vertical as far as the shins turned since, at rest. */
 MOCAP_API mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *config,

@@ -1701,12 +1701,13 @@ void pose_global(const mocap_pose &p, int j, double out[9])
 }  // namespace
 
 // A model without the mask cannot be told a sensor is missing. A silent shin or head is fed its
-// bone as the model posed it in the frame before, at rest (zero acceleration); a silent wrist or
-// pelvis keeps its held sample; everything live is fed as measured.
+// bone as the model posed it in the frame before, at rest (zero acceleration); a silent wrist its
+// held sample turned about the vertical as far as the pelvis turned since; everything live is fed
+// as measured.
 TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePose)
 {
     std::string cap = test_temp_path("silences.cap");
-    synth_config cfg = short_capture(91, 3.0, "walk", cap, false,
+    synth_config cfg = short_capture(91, 3.0, "turn", cap, false,
                                      {{MOCAP_SEGMENT_LEFT_SHIN, 1.0, 1.2},
                                       {MOCAP_SEGMENT_HEAD, 1.0, 1.2},
                                       {MOCAP_SEGMENT_RIGHT_WRIST, 1.0, 1.2}});
@@ -1717,6 +1718,8 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
     for (const auto &p : poses[0]) by_frame[p.frame_sequence] = &p;
 
     const int shin = 3, wrist = 2, head = 5;  // the default set's order
+    auto heading = [](const float *m) { return std::atan2(m[2] - m[5] * m[1], m[8] - m[5] * m[7]); };
+    double pelvis_when_wrist_live = 0.0, wrist_turn = 0.0;
     int silent_frames = 0, live_frames = 0;
     for (const auto &kv : tap.fed) {
         const SilenceTap::Fed &f = kv.second;
@@ -1726,11 +1729,18 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
             if (!silent) {
                 ++live_frames;
                 for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], f.measured[k][i], 1e-6) << k;
+                if (k == wrist) pelvis_when_wrist_live = heading(f.orientation[0]);
                 continue;
             }
             ASSERT_TRUE(k == shin || k == head || k == wrist) << "sensor " << k << " went silent";
-            if (k == wrist) {  // held: its last sample, acceleration too
-                for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], f.measured[k][i], 1e-6);
+            if (k == wrist) {  // its held sample, turned with the pelvis; its acceleration held
+                double ry[9], held[9], want[9];
+                const double turn = heading(f.orientation[0]) - pelvis_when_wrist_live;
+                wrist_turn = std::max(wrist_turn, std::fabs(std::remainder(turn, 2.0 * 3.14159265358979)));
+                mat3_rotation_y(ry, turn);
+                for (int i = 0; i < 9; ++i) held[i] = f.measured[k][i];
+                mat3_multiply(want, ry, held);
+                for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], want[i], 2e-4) << kv.first;
                 continue;
             }
             ++silent_frames;
@@ -1743,6 +1753,7 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
         }
     }
     EXPECT_GT(silent_frames, 2 * 50);  // both, most of 1.2 s at 60 Hz
+    EXPECT_GT(wrist_turn, 10.0 * 3.14159265358979 / 180.0) << "the body turned while the wrist was silent";
     EXPECT_GT(live_frames, 6 * 100);
     // the wrist's held acceleration is its last sample, not zero
     bool wrist_accelerates = false;
