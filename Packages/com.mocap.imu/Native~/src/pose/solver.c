@@ -65,10 +65,11 @@ typedef struct character {
      * silent sensor is fed to a model without the mask (have_bones: there was an output). */
     int have_bones;
     float bone_rot[MOCAP_MAX_SENSORS][9];
-    /* Each sensor's heading (rad) when the pelvis was last live; have_headings: bit k known. */
+    /* Each sensor's horizontal heading vector (x, z) at the pelvis' last fresh sample;
+     * have_headings: bit k known. */
     uint32_t have_headings;
-    float heading_ref[MOCAP_MAX_SENSORS];
-    /* The pelvis' heading (rad) when each wrist was last live; bit k: known. */
+    float heading_ref[MOCAP_MAX_SENSORS][2];
+    /* The pelvis' heading (rad) at each wrist's last fresh sample; bit k: known. */
     float pelvis_heading_at[MOCAP_MAX_SENSORS];
     uint32_t have_pelvis_heading_at;
 
@@ -440,7 +441,6 @@ static void keep_sensor_bones(const mocap_solver *s, character *ch, const float 
 static void stand_in_silent_sensors(const mocap_solver *s, const character *ch, const mocap_frame *f,
                                     float *orientation, float *acceleration)
 {
-    if (!ch->have_bones) return;
     for (int k = 0; k < s->sensors; ++k) {
         const int slot = ch->slot_of[k];
         if (slot < 0 || slot >= (int)f->sensor_count) continue;
@@ -448,16 +448,29 @@ static void stand_in_silent_sensors(const mocap_solver *s, const character *ch, 
         if (sf->state != MOCAP_SENSOR_SILENT || sf->segment == MOCAP_SEGMENT_PELVIS ||
             sf->segment == MOCAP_SEGMENT_LEFT_WRIST || sf->segment == MOCAP_SEGMENT_RIGHT_WRIST)
             continue;
-        memcpy(orientation + k * 9, ch->bone_rot[k], 9 * sizeof(float));
+        if (ch->have_bones) memcpy(orientation + k * 9, ch->bone_rot[k], 9 * sizeof(float));
         memset(acceleration + k * 3, 0, 3 * sizeof(float));
     }
 }
 
 /* The heading (rad, about +Y) of a bone's forward direction on the floor, as the model reads the
  * pelvis' (its up axis keeps it defined when the forward axis is vertical). */
+static void bone_heading_vector(const float *m, float h[2])
+{
+    h[0] = m[2] - m[5] * m[1];
+    h[1] = m[8] - m[5] * m[7];
+}
+
 static float bone_heading(const float *m)
 {
-    return atan2f(m[2] - m[5] * m[1], m[8] - m[5] * m[7]);
+    float h[2];
+    bone_heading_vector(m, h);
+    return atan2f(h[0], h[1]);
+}
+
+static int sensor_live(const mocap_sensor_frame *sf)
+{
+    return sf->state == MOCAP_SENSOR_FRESH || sf->state == MOCAP_SENSOR_HOLDING;
 }
 
 /* m = Ry(angle) m: a rotation turned about the vertical (+Y), the heading growing by angle. */
@@ -478,8 +491,8 @@ static void turn_about_vertical(float *m, double angle)
  * Every model reads the body in the pelvis' frame, so a pelvis held still while the performer
  * turns turned the whole pose away; the legs carry the pelvis' heading through a turn, and a held
  * acceleration is a constant push the root integrates. 15 validation clips with a 5 s gap: angle
- * 19.3 -> 10.1 deg, the pelvis' own 61.6 -> 17.4, new frames past 90 deg 1521 -> 0, 10 s drift
- * 0.67 -> 0.41 m (the head's turn as well, or instead, did less: training/results/EXPERIMENTS.md). */
+ * 19.3 -> 9.1 deg, the pelvis' own 61.6 -> 9.9, new frames past 90 deg 1521 -> 0, 10 s drift
+ * 0.67 -> 0.36 m (the head's turn as well, or instead, did less: training/results/EXPERIMENTS.md). */
 static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap_frame *f,
                                float *orientation, float *acceleration)
 {
@@ -487,38 +500,44 @@ static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap
     if (pelvis < 0) return;
     const int slot = ch->slot_of[pelvis];
     if (slot < 0 || slot >= (int)f->sensor_count) return;
-    if (f->sensors[slot].state != MOCAP_SENSOR_SILENT) {
+    const int32_t state = f->sensors[slot].state;
+    if (state == MOCAP_SENSOR_FRESH) {
+        /* the references go with the sample a silence will hold, not with a later frame */
         ch->have_headings = 0;
         for (int k = 0; k < s->sensors; ++k) {
             const int sk = ch->slot_of[k];
-            if (sk < 0 || sk >= (int)f->sensor_count || f->sensors[sk].state == MOCAP_SENSOR_SILENT) continue;
-            ch->heading_ref[k] = bone_heading(orientation + k * 9);
+            if (sk < 0 || sk >= (int)f->sensor_count || !sensor_live(&f->sensors[sk])) continue;
+            bone_heading_vector(orientation + k * 9, ch->heading_ref[k]);
             ch->have_headings |= 1u << k;
         }
-        return;
     }
+    if (state != MOCAP_SENSOR_SILENT) return;
     memset(acceleration + pelvis * 3, 0, 3 * sizeof(float));
+    /* the shins' turns summed as vectors: a shin whose heading is ill-defined (pitched near the
+     * vertical, its horizontal vector short) counts for little */
     double sx = 0.0, cx = 0.0;
     for (int k = 0; k < s->sensors; ++k) {
         const int32_t segment = s->info.sensor_segments[k];
         const int sk = ch->slot_of[k];
         if ((segment != MOCAP_SEGMENT_LEFT_SHIN && segment != MOCAP_SEGMENT_RIGHT_SHIN) ||
             !(ch->have_headings & (1u << k)) || sk < 0 || sk >= (int)f->sensor_count ||
-            f->sensors[sk].state == MOCAP_SENSOR_SILENT)
+            !sensor_live(&f->sensors[sk]))
             continue;
-        const double d = (double)bone_heading(orientation + k * 9) - (double)ch->heading_ref[k];
-        sx += sin(d);
-        cx += cos(d);
+        const float *a = ch->heading_ref[k];
+        float b[2];
+        bone_heading_vector(orientation + k * 9, b);
+        sx += (double)b[0] * a[1] - (double)b[1] * a[0];
+        cx += (double)a[0] * b[0] + (double)a[1] * b[1];
     }
-    if (sx * sx + cx * cx < 1e-12) return;   /* no shin to follow: the last sample as it was */
+    if (sx * sx + cx * cx < 1e-12) return;   /* no shin to follow: not turned */
     turn_about_vertical(orientation + pelvis * 9, atan2(sx, cx));
 }
 
 /* A model without the mask is fed a silent wrist's held sample turned about the vertical as far
  * as the pelvis turned since the wrist was last live: a hand held still in the room while the
  * body turns twists against the arm, one turned with the body keeps its pose relative to it (15
- * validation clips, 5 s gap: the pose 10.4 - 11.1 -> 9.4 - 10.0 deg, the silent hand 61 - 76 ->
- * 45 - 58 deg, new frames past 90 deg 450 / 741 -> 363 / 652). */
+ * validation clips, 5 s gap: the pose 10.4 - 11.1 -> 9.3 - 9.9 deg, the silent hand 61 - 76 ->
+ * 42 - 55 deg, new frames past 90 deg 450 / 741 -> 318 / 702). */
 static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap_frame *f,
                                float *orientation)
 {
@@ -529,11 +548,11 @@ static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap
         if (segment != MOCAP_SEGMENT_LEFT_WRIST && segment != MOCAP_SEGMENT_RIGHT_WRIST) continue;
         const int sk = ch->slot_of[k];
         if (sk < 0 || sk >= (int)f->sensor_count) continue;
-        if (f->sensors[sk].state != MOCAP_SENSOR_SILENT) {
+        if (f->sensors[sk].state == MOCAP_SENSOR_FRESH) {
             ch->pelvis_heading_at[k] = pelvis_now;
             ch->have_pelvis_heading_at |= 1u << k;
-            continue;
         }
+        if (f->sensors[sk].state != MOCAP_SENSOR_SILENT) continue;
         if (!(ch->have_pelvis_heading_at & (1u << k))) continue;
         turn_about_vertical(orientation + k * 9, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
     }
@@ -571,6 +590,7 @@ static void reset_character_state(mocap_solver *s, int32_t c)
     ch->have_last_pose = 0;
     ch->have_bones = 0;
     ch->have_headings = 0;
+    ch->have_pelvis_heading_at = 0;
 }
 
 /* Keeps a failed inference's status and text (mocap_last_error on this thread) for the stats:
