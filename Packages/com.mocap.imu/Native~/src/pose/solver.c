@@ -175,15 +175,20 @@ int solver_frame_input(const mocap_frame *f, const int8_t *slot_of, int sensors,
     return 0;
 }
 
+/* Model sensor k's entry of f, or NULL where the session has no such sensor. */
+static const mocap_sensor_frame *model_sensor(const character *ch, const mocap_frame *f, int k)
+{
+    const int slot = ch->slot_of[k];
+    return slot >= 0 && slot < (int)f->sensor_count ? &f->sensors[slot] : NULL;
+}
+
 /* Whether the model's required sensors are calibrated in f (require_calibration). */
 static int required_calibrated(const mocap_solver *s, const character *ch, const mocap_frame *f)
 {
     for (int k = 0; k < s->sensors; ++k) {
         if (!(s->info.sensor_required_mask & (1u << k))) continue;
-        const int slot = ch->slot_of[k];
-        if (slot < 0 || slot >= (int)f->sensor_count ||
-            !(f->sensors[slot].flags & MOCAP_SENSOR_CALIBRATED))
-            return 0;
+        const mocap_sensor_frame *sf = model_sensor(ch, f, k);
+        if (!sf || !(sf->flags & MOCAP_SENSOR_CALIBRATED)) return 0;
     }
     return 1;
 }
@@ -192,10 +197,8 @@ static int required_calibrated(const mocap_solver *s, const character *ch, const
 static int model_sensors_fresh(const mocap_solver *s, const character *ch, const mocap_frame *f)
 {
     for (int k = 0; k < s->sensors; ++k) {
-        const int slot = ch->slot_of[k];
-        if (slot < 0 || slot >= (int)f->sensor_count ||
-            f->sensors[slot].state != MOCAP_SENSOR_FRESH)
-            return 0;
+        const mocap_sensor_frame *sf = model_sensor(ch, f, k);
+        if (!sf || sf->state != MOCAP_SENSOR_FRESH) return 0;
     }
     return 1;
 }
@@ -411,20 +414,17 @@ static void hold_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t 
     emit_held(ch, &e, pose_stamp(ch, f, taken_ns), &s->pose);
 }
 
-/* Each model sensor's bone, globally, in the model output rot (joint 0 global, the others local). */
-static void keep_sensor_bones(const mocap_solver *s, character *ch, const float *rot)
+/* Each model sensor's bone, globally, in the model's pose q (joint 0 global, the others local). */
+static void keep_sensor_bones(const mocap_solver *s, character *ch, const double (*q)[4])
 {
-    float global[MOCAP_JOINT_COUNT][9];
-    memcpy(global[0], rot, sizeof global[0]);
-    for (int j = 1; j < MOCAP_JOINT_COUNT; ++j) {
-        const float *a = global[s->info.joint_parents[j]], *b = rot + j * 9;
-        for (int r = 0; r < 3; ++r)
-            for (int k = 0; k < 3; ++k)
-                global[j][r * 3 + k] = a[r * 3] * b[k] + a[r * 3 + 1] * b[3 + k] + a[r * 3 + 2] * b[6 + k];
-    }
+    static const double origin[3] = {0.0, 0.0, 0.0};
+    double global[MOCAP_JOINT_COUNT][4], m[9];
+    skeleton_fk(&s->sk, q, origin, global, NULL);
     for (int k = 0; k < s->sensors; ++k) {
         const int32_t joint = mocap_segment_joint(s->info.sensor_segments[k]);
-        if (joint >= 0 && joint < MOCAP_JOINT_COUNT) memcpy(ch->bone_rot[k], global[joint], sizeof ch->bone_rot[k]);
+        if (joint < 0 || joint >= MOCAP_JOINT_COUNT) continue;
+        quat_to_mat3(m, global[joint]);
+        for (int i = 0; i < 9; ++i) ch->bone_rot[k][i] = (float)m[i];
     }
     ch->have_bones = 1;
 }
@@ -441,11 +441,10 @@ static void keep_sensor_bones(const mocap_solver *s, character *ch, const float 
 static void stand_in_silent_sensors(const mocap_solver *s, const character *ch, const mocap_frame *f,
                                     float *orientation, float *acceleration)
 {
+    if (s->with_mask) return;
     for (int k = 0; k < s->sensors; ++k) {
-        const int slot = ch->slot_of[k];
-        if (slot < 0 || slot >= (int)f->sensor_count) continue;
-        const mocap_sensor_frame *sf = &f->sensors[slot];
-        if (sf->state != MOCAP_SENSOR_SILENT || sf->segment == MOCAP_SEGMENT_PELVIS ||
+        const mocap_sensor_frame *sf = model_sensor(ch, f, k);
+        if (!sf || sf->state != MOCAP_SENSOR_SILENT || sf->segment == MOCAP_SEGMENT_PELVIS ||
             sf->segment == MOCAP_SEGMENT_LEFT_WRIST || sf->segment == MOCAP_SEGMENT_RIGHT_WRIST)
             continue;
         if (ch->have_bones) memcpy(orientation + k * 9, ch->bone_rot[k], 9 * sizeof(float));
@@ -468,9 +467,10 @@ static float bone_heading(const float *m)
     return atan2f(h[0], h[1]);
 }
 
+/* A sensor with a sample of its own for this frame (fresh, or held within stale_after_s). */
 static int sensor_live(const mocap_sensor_frame *sf)
 {
-    return sf->state == MOCAP_SENSOR_FRESH || sf->state == MOCAP_SENSOR_HOLDING;
+    return sf && (sf->state == MOCAP_SENSOR_FRESH || sf->state == MOCAP_SENSOR_HOLDING);
 }
 
 /* m = Ry(angle) m: a rotation turned about the vertical (+Y), the heading growing by angle. */
@@ -497,31 +497,26 @@ static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap
                                float *orientation, float *acceleration)
 {
     const int pelvis = s->pelvis_index;
-    if (pelvis < 0) return;
-    const int slot = ch->slot_of[pelvis];
-    if (slot < 0 || slot >= (int)f->sensor_count) return;
-    const int32_t state = f->sensors[slot].state;
-    if (state == MOCAP_SENSOR_FRESH) {
+    const mocap_sensor_frame *pf = pelvis >= 0 ? model_sensor(ch, f, pelvis) : NULL;
+    if (!pf) return;
+    if (pf->state == MOCAP_SENSOR_FRESH) {
         /* the references go with the sample a silence will hold, not with a later frame */
         ch->have_headings = 0;
         for (int k = 0; k < s->sensors; ++k) {
-            const int sk = ch->slot_of[k];
-            if (sk < 0 || sk >= (int)f->sensor_count || !sensor_live(&f->sensors[sk])) continue;
+            if (!sensor_live(model_sensor(ch, f, k))) continue;
             bone_heading_vector(orientation + k * 9, ch->heading_ref[k]);
             ch->have_headings |= 1u << k;
         }
     }
-    if (state != MOCAP_SENSOR_SILENT) return;
+    if (pf->state != MOCAP_SENSOR_SILENT) return;
     memset(acceleration + pelvis * 3, 0, 3 * sizeof(float));
     /* the shins' turns summed as vectors: a shin whose heading is ill-defined (pitched near the
      * vertical, its horizontal vector short) counts for little */
     double sx = 0.0, cx = 0.0;
     for (int k = 0; k < s->sensors; ++k) {
         const int32_t segment = s->info.sensor_segments[k];
-        const int sk = ch->slot_of[k];
         if ((segment != MOCAP_SEGMENT_LEFT_SHIN && segment != MOCAP_SEGMENT_RIGHT_SHIN) ||
-            !(ch->have_headings & (1u << k)) || sk < 0 || sk >= (int)f->sensor_count ||
-            !sensor_live(&f->sensors[sk]))
+            !(ch->have_headings & (1u << k)) || !sensor_live(model_sensor(ch, f, k)))
             continue;
         const float *a = ch->heading_ref[k];
         float b[2];
@@ -545,14 +540,13 @@ static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap
     const float pelvis_now = bone_heading(orientation + s->pelvis_index * 9);
     for (int k = 0; k < s->sensors; ++k) {
         const int32_t segment = s->info.sensor_segments[k];
-        if (segment != MOCAP_SEGMENT_LEFT_WRIST && segment != MOCAP_SEGMENT_RIGHT_WRIST) continue;
-        const int sk = ch->slot_of[k];
-        if (sk < 0 || sk >= (int)f->sensor_count) continue;
-        if (f->sensors[sk].state == MOCAP_SENSOR_FRESH) {
+        const mocap_sensor_frame *sf = model_sensor(ch, f, k);
+        if (!sf || (segment != MOCAP_SEGMENT_LEFT_WRIST && segment != MOCAP_SEGMENT_RIGHT_WRIST)) continue;
+        if (sf->state == MOCAP_SENSOR_FRESH) {
             ch->pelvis_heading_at[k] = pelvis_now;
             ch->have_pelvis_heading_at |= 1u << k;
         }
-        if (f->sensors[sk].state != MOCAP_SENSOR_SILENT) continue;
+        if (sf->state != MOCAP_SENSOR_SILENT) continue;
         if (!(ch->have_pelvis_heading_at & (1u << k))) continue;
         turn_about_vertical(orientation + k * 9, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
     }
@@ -562,10 +556,10 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
                        const float *rot, const float *vel, const float *contact)
 {
     character *ch = s->chars[c];
-    if (!s->with_mask) keep_sensor_bones(s, ch, rot);
     waiting_frame e;
     waiting_frame_of(&e, s, ch, f, taken_ns);
     for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, e.q[j]);
+    if (!s->with_mask) keep_sensor_bones(s, ch, (const double (*)[4])e.q);
     memcpy(e.vel, vel, sizeof e.vel);
     memcpy(e.contact, contact, sizeof e.contact);
     if (s->smoothing_delay > 0) {
@@ -634,7 +628,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
             hold_pose(s, c, frames[i], taken);
             continue;
         }
-        if (!s->with_mask) stand_in_silent_sensors(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb]);
+        stand_in_silent_sensors(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb]);
         turn_silent_pelvis(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb]);
         turn_silent_wrists(s, ch, frames[i], s->in_ori[nb]);
         s->tick_taken[i] = taken;
