@@ -847,7 +847,8 @@ def main(args=None) -> int:
     if read_model_info(model).get("imu_mask"):
         notes.append(f"The model (contract {contract}) reads the mask: the engine holds a silent "
                      "sensor's last sample briefly, then feeds it masked (imu_mask 0, zero inputs) "
-                     "until it returns.")
+                     "until it returns; a silent shin instead gets its bone as the model posed it "
+                     "in the frame before, at rest, marked present.")
     else:
         notes.append(f"The model (contract {contract}) reads no mask: until a silent sensor "
                      "returns, the engine feeds a shin or the head its bone as the model posed it "

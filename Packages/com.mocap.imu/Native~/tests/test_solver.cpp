@@ -1827,3 +1827,97 @@ TEST_F(SolverOnShippedModel, ASilentPelvisTurnsWithTheShins)
     EXPECT_LT(off_truth / silent * deg, 5.0);  // the real pelvis' heading, where holding was ~100 off
     EXPECT_GT(off_held / silent * deg, 30.0);
 }
+
+namespace {
+
+const std::string kShippedChestModel =
+    (kTestsDir / ".." / ".." / "Runtime" / "Models" / "mocap_pose_chest_int8.onnx").string();
+
+struct MaskedTap {
+    struct Fed {
+        int32_t state[MOCAP_MAX_SENSORS];
+        float orientation[MOCAP_MAX_SENSORS][9];
+        float acceleration[MOCAP_MAX_SENSORS][3];
+        float mask[MOCAP_MAX_SENSORS];
+    };
+    std::map<uint64_t, Fed> fed;
+};
+
+void masked_tap(void *user, int32_t, const mocap_frame *frame, const float *ori, const float *acc,
+                const float *mask, int sensor_count)
+{
+    MaskedTap::Fed f{};
+    for (int k = 0; k < sensor_count; ++k) {
+        f.state[k] = k < (int)frame->sensor_count ? frame->sensors[k].state : MOCAP_SENSOR_ABSENT;
+        std::copy(ori + k * 9, ori + k * 9 + 9, f.orientation[k]);
+        std::copy(acc + k * 3, acc + k * 3 + 3, f.acceleration[k]);
+        f.mask[k] = mask ? mask[k] : -1.0f;
+    }
+    static_cast<MaskedTap *>(user)->fed[frame->sequence] = f;
+}
+
+}  // namespace
+
+// A masked model (the shipped seven-sensor one, on six sensors) is told a silent wrist or head
+// is missing, but a silent shin is fed its bone as the model posed it the frame before, at
+// rest, and marked present.
+TEST(SolverOnShippedChestModel, ASilentShinStandsInFromThePoseOthersAreMasked)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedChestModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = test_temp_path("masked_silences.cap");
+    synth_config cfg = short_capture(93, 3.0, "walk", cap, false,
+                                     {{MOCAP_SEGMENT_RIGHT_SHIN, 1.0, 1.2},
+                                      {MOCAP_SEGMENT_HEAD, 1.0, 1.2},
+                                      {MOCAP_SEGMENT_LEFT_WRIST, 1.0, 1.2}});
+    Sessions sessions;
+    sessions.list.push_back(open_replay_sensors(cap, cfg, 6, false));
+    ASSERT_NE(sessions.list[0], nullptr);
+    const mocap_solver_config sc = raw_output_config();
+    Solver solver;
+    ASSERT_EQ(mocap_solver_open(model.m, &sc, &solver.s), MOCAP_OK) << mocap_last_error();
+    int32_t ch = -1;
+    ASSERT_EQ(mocap_solver_add_character(solver.s, sessions.list[0], &ch), MOCAP_OK) << mocap_last_error();
+    MaskedTap tap;
+    solver_set_input_tap(solver.s, masked_tap, &tap);
+    ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
+    ASSERT_EQ(mocap_session_start(sessions.list[0]), MOCAP_OK);
+    std::vector<std::vector<mocap_pose>> poses;
+    ASSERT_TRUE(drain_to_end(solver.s, 1, poses, 60));
+    ASSERT_FALSE(poses.empty());
+    std::map<uint64_t, const mocap_pose *> by_frame;
+    for (const auto &p : poses[0]) by_frame[p.frame_sequence] = &p;
+
+    const int wrist = 1, shin = 4, head = 5, chest = 6;  // the model's order
+    int shin_frames = 0, masked_frames = 0, live_frames = 0;
+    for (const auto &kv : tap.fed) {
+        const MaskedTap::Fed &f = kv.second;
+        ASSERT_EQ(f.mask[chest], 0.0f);  // the capture has none
+        for (int k = 0; k < 6; ++k) {
+            if (f.state[k] != MOCAP_SENSOR_SILENT) {
+                ++live_frames;
+                ASSERT_EQ(f.mask[k], 1.0f) << "sensor " << k << " frame " << kv.first;
+                continue;
+            }
+            ASSERT_TRUE(k == shin || k == head || k == wrist) << "sensor " << k << " went silent";
+            if (k != shin) {
+                ++masked_frames;
+                ASSERT_EQ(f.mask[k], 0.0f) << "sensor " << k;
+                for (int i = 0; i < 9; ++i) ASSERT_EQ(f.orientation[k][i], 0.0f);
+                continue;
+            }
+            ++shin_frames;
+            ASSERT_EQ(f.mask[k], 1.0f) << "frame " << kv.first;
+            auto prev = by_frame.find(kv.first - 1);
+            ASSERT_NE(prev, by_frame.end()) << "frame " << kv.first;
+            double g[9];
+            pose_global(*prev->second, 5, g);  // right knee -> the shin bone
+            for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], g[i], 1e-5) << kv.first;
+            for (int i = 0; i < 3; ++i) ASSERT_EQ(f.acceleration[k][i], 0.0f);
+        }
+    }
+    EXPECT_GT(shin_frames, 50);          // most of 1.2 s at 60 Hz
+    EXPECT_GT(masked_frames, 2 * 50);    // the head and the wrist
+    EXPECT_GT(live_frames, 6 * 100);
+}
