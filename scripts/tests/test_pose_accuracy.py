@@ -113,7 +113,7 @@ def test_shipped_model_stays_within_todays_accuracy(capture, model, tmp_path):
     assert out_of_bounds(figures) == {}, f"accuracy regressed: {figures}"
 
 
-# The seven-sensor model (contract 2, the chest optional) over the same seven captures, with the
+# The seven-sensor model (masked, the chest optional) over the same seven captures, with the
 # chest / without it: angle 10.29 - 10.63 / 10.22 - 10.59 deg, position 5.94 - 6.69 / 6.04 - 6.75
 # cm, drift 5 s 0.34 - 0.49 / 0.30 - 0.49 m, 10 s 0.65 - 0.95 / 0.58 - 0.95 m (it drifts more than
 # the six-sensor model on this procedural motion, though not on CMU's validation and test

@@ -67,7 +67,7 @@ static const mocapctl_command COMMANDS[] = {
      "  --csv FRAMES.csv     every sensor frame (without the model)\n"
      "  --realtime           at the capture's pace (default: as fast as possible)\n"
      "  --rate HZ            sensor frames per second (without the model; default 60)\n"
-     "  --model M.onnx       the pose model (default: the shipped fp32 model, or $MOCAP_MODEL)\n"
+     "  --model M.onnx       the pose model (default: the shipped int8 model, or $MOCAP_MODEL)\n"
      "  --out POSE.bvh       BVH: SMPL-24 skeleton, metres, at the model's frame rate\n"
      "  --bvh-order zxy|xyz  the BVH's Euler order (default zxy)\n"
      "  --json POSES.jsonl   one JSON object per pose\n"
