@@ -1702,8 +1702,8 @@ void pose_global(const mocap_pose &p, int j, double out[9])
 
 // A model without the mask cannot be told a sensor is missing. A silent shin or head is fed its
 // bone as the model posed it in the frame before, at rest (zero acceleration); a silent wrist its
-// held sample turned about the vertical as far as the pelvis turned since; everything live is fed
-// as measured.
+// held sample turned about the vertical as far as the pelvis turned since, moving towards the
+// hand's usual orientation over 4 s of silence; everything live is fed as measured.
 TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePose)
 {
     std::string cap = test_temp_path("silences.cap");
@@ -1719,8 +1719,11 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
 
     const int shin = 3, wrist = 2, head = 5;  // the default set's order
     auto heading = [](const float *m) { return std::atan2(m[2] - m[5] * m[1], m[8] - m[5] * m[7]); };
-    double pelvis_when_wrist_live = 0.0, wrist_turn = 0.0;
-    int silent_frames = 0, live_frames = 0;
+    double pelvis_when_wrist_live = 0.0, wrist_turn = 0.0, max_share = 0.0;
+    int silent_frames = 0, live_frames = 0, wrist_silent_frames = 0;
+    // solver.c's SILENT_WRIST_PRIOR for the right wrist (python3 -m training wrist-prior)
+    static const double kRightWristUsual[9] = {-0.0721, -0.7129, 0.6976, 0.2907, 0.6540,
+                                               0.6984,  -0.9541, 0.2531, 0.1600};
     for (const auto &kv : tap.fed) {
         const SilenceTap::Fed &f = kv.second;
         auto prev = by_frame.find(kv.first - 1);
@@ -1733,14 +1736,25 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
                 continue;
             }
             ASSERT_TRUE(k == shin || k == head || k == wrist) << "sensor " << k << " went silent";
-            if (k == wrist) {  // its held sample, turned with the pelvis; its acceleration held
-                double ry[9], held[9], want[9];
+            if (k == wrist) {
+                // its held sample turned with the pelvis, on its way to the hand's usual
+                // orientation (turned with the pelvis too) as its silence grows; acceleration held
+                double ry[9], held[9], turned[9], usual[9], want[9];
                 const double turn = heading(f.orientation[0]) - pelvis_when_wrist_live;
                 wrist_turn = std::max(wrist_turn, std::fabs(std::remainder(turn, 2.0 * 3.14159265358979)));
                 mat3_rotation_y(ry, turn);
                 for (int i = 0; i < 9; ++i) held[i] = f.measured[k][i];
-                mat3_multiply(want, ry, held);
+                mat3_multiply(turned, ry, held);
+                mat3_rotation_y(ry, heading(f.orientation[0]));
+                mat3_multiply(usual, ry, kRightWristUsual);
+                const double share = ++wrist_silent_frames / 60.0 / 4.0;
+                double qa[4], qb[4], q[4];
+                mat3_to_quat(qa, turned);
+                mat3_to_quat(qb, usual);
+                quat_slerp(q, qa, qb, share);
+                quat_to_mat3(want, q);
                 for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], want[i], 2e-4) << kv.first;
+                max_share = std::max(max_share, share);
                 continue;
             }
             ++silent_frames;
@@ -1754,6 +1768,7 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
     }
     EXPECT_GT(silent_frames, 2 * 50);  // both, most of 1.2 s at 60 Hz
     EXPECT_GT(wrist_turn, 10.0 * 3.14159265358979 / 180.0) << "the body turned while the wrist was silent";
+    EXPECT_GT(max_share, 0.2) << "the wrist was silent long enough to move towards its usual orientation";
     EXPECT_GT(live_frames, 6 * 100);
     // the wrist's held acceleration is its last sample, not zero
     bool wrist_accelerates = false;

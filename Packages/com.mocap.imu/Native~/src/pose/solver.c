@@ -73,6 +73,8 @@ typedef struct character {
     /* The pelvis' heading (rad) at each wrist's last fresh sample; bit k: known. */
     float pelvis_heading_at[MOCAP_MAX_SENSORS];
     uint32_t have_pelvis_heading_at;
+    /* Model frames each wrist has been silent for (turn_silent_wrists). */
+    int32_t silent_frames[MOCAP_MAX_SENSORS];
 
     mocap_atomic_int ended;     /* the session ended and every pose was pushed */
     mocap_atomic_int reset_requested;
@@ -544,11 +546,25 @@ static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap
     turn_about_vertical(orientation + pelvis * 9, atan2(sx, cx));
 }
 
+/* The usual orientation of each wrist bone (left, right) in the frame of the pelvis' heading:
+ * the chordal mean over every 4th training clip (python3 -m training wrist-prior). */
+static const float SILENT_WRIST_PRIOR[2][9] = {
+    {-0.0718f, 0.8356f, -0.5446f, -0.3233f, 0.4970f, 0.8053f, 0.9436f, 0.2339f, 0.2345f},
+    {-0.0721f, -0.7129f, 0.6976f, 0.2907f, 0.6540f, 0.6984f, -0.9541f, 0.2531f, 0.1600f},
+};
+/* Seconds of silence after which a wrist is fed the usual orientation alone. */
+#define SILENT_WRIST_SETTLE_S 4.0
+
 /* A model without the mask is fed a silent wrist's held sample turned about the vertical as far
  * as the pelvis turned since the wrist was last live: a hand held still in the room while the
  * body turns twists against the arm, one turned with the body keeps its pose relative to it (15
  * validation clips, 5 s gap: the pose 10.4 - 11.1 -> 9.3 - 9.9 deg, the silent hand 61 - 76 ->
- * 42 - 55 deg, new frames past 90 deg 450 / 741 -> 318 / 702). */
+ * 42 - 55 deg, new frames past 90 deg 450 / 741 -> 318 / 702). The longer it is silent, the less
+ * that sample says about where the hand is now (an arm raised when the sensor dropped would stay
+ * raised), so it turns towards the hand's usual orientation, reached after SILENT_WRIST_SETTLE_S
+ * (the same clips: the pose 9.3 - 9.9 -> 9.05 - 9.25 deg, the hand 42 - 55 -> 38 - 46 deg, new
+ * frames past 90 deg 318 / 702 -> 92 / 289; settling in 1 or 2 s, or halfway in 2 or 8 s, did
+ * less). */
 static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap_frame *f,
                                float *orientation)
 {
@@ -562,9 +578,25 @@ static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap
             ch->pelvis_heading_at[k] = pelvis_now;
             ch->have_pelvis_heading_at |= 1u << k;
         }
-        if (sf->state != MOCAP_SENSOR_SILENT) continue;
+        if (sf->state != MOCAP_SENSOR_SILENT) {
+            ch->silent_frames[k] = 0;
+            continue;
+        }
         if (!(ch->have_pelvis_heading_at & (1u << k))) continue;
-        turn_about_vertical(orientation + k * 9, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
+        float *m = orientation + k * 9;
+        turn_about_vertical(m, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
+
+        if (ch->silent_frames[k] < INT32_MAX) ch->silent_frames[k]++;
+        double share = ch->silent_frames[k] * s->drift.dt / SILENT_WRIST_SETTLE_S;
+        if (share > 1.0) share = 1.0;
+        float usual[9];
+        memcpy(usual, SILENT_WRIST_PRIOR[segment == MOCAP_SEGMENT_LEFT_WRIST ? 0 : 1], sizeof usual);
+        turn_about_vertical(usual, pelvis_now);
+        double from[4], to[4], q[4], r[9];
+        if (skeleton_matrix_to_quat(m, from) != 0 || skeleton_matrix_to_quat(usual, to) != 0) continue;
+        quat_slerp(q, from, to, share);
+        quat_to_mat3(r, q);
+        for (int i = 0; i < 9; ++i) m[i] = (float)r[i];
     }
 }
 
@@ -601,6 +633,7 @@ static void reset_character_state(mocap_solver *s, int32_t c)
     ch->have_bones = 0;
     ch->have_headings = 0;
     ch->have_pelvis_heading_at = 0;
+    memset(ch->silent_frames, 0, sizeof ch->silent_frames);
 }
 
 /* Keeps a failed inference's status and text (mocap_last_error on this thread) for the stats:
