@@ -1,7 +1,7 @@
 """python3 -m training <command>: the pose model's tooling, from motion data to the shipped ONNX.
 
 Commands: prepare | pack | train | average | export | quantize | evaluate | sensor-gain |
-synth-capture | missing-sensor | engine-eval | smoothing-study | cv | stride-scaling | wrist-prior | tip-model.
+synth-capture | missing-sensor | engine-eval | smoothing-study | cv | stride-scaling | usual-orientation | tip-model.
 
 Each subcommand imports its module lazily, so --help works while a module is missing."""
 from __future__ import annotations
@@ -25,7 +25,7 @@ COMMANDS = {
     "smoothing-study": ("smoothing_study", "output smoothing that may wait a frame or two: what it buys"),
     "cv": ("cross_validate", "a training recipe scored by cross-validation over subject folds"),
     "stride-scaling": ("stride_scaling", "how the root speed follows body size: the height input's exponent"),
-    "wrist-prior": ("wrist_prior", "the hand's usual orientation, for a silent wrist sensor (solver.c)"),
+    "usual-orientation": ("usual_orientation", "the hands' and head's usual orientation, for silent sensors (solver.c)"),
     "tip-model": ("tip_model", "TIP-shaped ONNX network, random weights (mocapctl bench tip)"),
 }
 

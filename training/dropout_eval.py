@@ -853,9 +853,9 @@ def main(args=None) -> int:
         notes.append(f"The model (contract {contract}) reads no mask: until a silent sensor "
                      "returns, the engine feeds a shin or the head its bone as the model posed it "
                      "in the frame before, at rest (zero acceleration), and a wrist its last held "
-                     "sample turned about the vertical as far as the pelvis turned since, moving "
-                     "over 4 s towards the hand's usual orientation (a model with the mask would "
-                     "get it masked, its inputs zero).")
+                     "sample turned about the vertical as far as the pelvis turned since; a wrist "
+                     "or the head moves over 4 s towards its bone's usual orientation (a model "
+                     "with the mask would get it masked, its inputs zero).")
     notes.append("A silent pelvis is never masked (every model reads the body in its frame): it is "
                  "fed its last sample turned about the vertical by the shins' mean heading change "
                  "since it was last live, at rest (zero acceleration).")

@@ -1702,8 +1702,9 @@ void pose_global(const mocap_pose &p, int j, double out[9])
 
 // A model without the mask cannot be told a sensor is missing. A silent shin or head is fed its
 // bone as the model posed it in the frame before, at rest (zero acceleration); a silent wrist its
-// held sample turned about the vertical as far as the pelvis turned since, moving towards the
-// hand's usual orientation over 4 s of silence; everything live is fed as measured.
+// held sample turned about the vertical as far as the pelvis turned since; a silent wrist or head
+// moves towards its bone's usual orientation over 4 s of silence; everything live is fed as
+// measured.
 TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePose)
 {
     std::string cap = test_temp_path("silences.cap");
@@ -1720,10 +1721,12 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
     const int shin = 3, wrist = 2, head = 5;  // the default set's order
     auto heading = [](const float *m) { return std::atan2(m[2] - m[5] * m[1], m[8] - m[5] * m[7]); };
     double pelvis_when_wrist_live = 0.0, wrist_turn = 0.0, max_share = 0.0;
-    int silent_frames = 0, live_frames = 0, wrist_silent_frames = 0;
-    // solver.c's SILENT_WRIST_PRIOR for the right wrist (python3 -m training wrist-prior)
+    int silent_frames = 0, live_frames = 0, wrist_silent_frames = 0, head_silent_frames = 0;
+    // solver.c's USUAL_RIGHT_WRIST and USUAL_HEAD (python3 -m training usual-orientation)
     static const double kRightWristUsual[9] = {-0.0721, -0.7129, 0.6976, 0.2907, 0.6540,
                                                0.6984,  -0.9541, 0.2531, 0.1600};
+    static const double kHeadUsual[9] = {0.9984, -0.0092, -0.0555, 0.0001, 0.9871,
+                                         -0.1602, 0.0563, 0.1599, 0.9855};
     for (const auto &kv : tap.fed) {
         const SilenceTap::Fed &f = kv.second;
         auto prev = by_frame.find(kv.first - 1);
@@ -1761,6 +1764,15 @@ TEST_F(SolverOnShippedModel, SilentSensorsOfAModelWithoutTheMaskStandInFromThePo
             ASSERT_NE(prev, by_frame.end()) << "frame " << kv.first;
             double g[9];
             pose_global(*prev->second, k == shin ? 4 : 15, g);  // left knee -> ankle bone, head
+            if (k == head) {  // on its way to the head's usual orientation, turned with the pelvis
+                double ry[9], usual[9], qa[4], qb[4], q[4];
+                mat3_rotation_y(ry, heading(f.orientation[0]));
+                mat3_multiply(usual, ry, kHeadUsual);
+                mat3_to_quat(qa, g);
+                mat3_to_quat(qb, usual);
+                quat_slerp(q, qa, qb, ++head_silent_frames / 60.0 / 4.0);
+                quat_to_mat3(g, q);
+            }
             for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], g[i], 1e-5) << "sensor " << k;
             for (int i = 0; i < 3; ++i) ASSERT_EQ(f.acceleration[k][i], 0.0f);
             // and not what it last measured: the body walked on

@@ -73,7 +73,7 @@ typedef struct character {
     /* The pelvis' heading (rad) at each wrist's last fresh sample; bit k: known. */
     float pelvis_heading_at[MOCAP_MAX_SENSORS];
     uint32_t have_pelvis_heading_at;
-    /* Model frames each wrist has been silent for (turn_silent_wrists). */
+    /* Model frames each sensor has been silent for (settle_silent_sensors). */
     int32_t silent_frames[MOCAP_MAX_SENSORS];
 
     mocap_atomic_int ended;     /* the session ended and every pose was pushed */
@@ -546,25 +546,12 @@ static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap
     turn_about_vertical(orientation + pelvis * 9, atan2(sx, cx));
 }
 
-/* The usual orientation of each wrist bone (left, right) in the frame of the pelvis' heading:
- * the chordal mean over every 4th training clip (python3 -m training wrist-prior). */
-static const float SILENT_WRIST_PRIOR[2][9] = {
-    {-0.0718f, 0.8356f, -0.5446f, -0.3233f, 0.4970f, 0.8053f, 0.9436f, 0.2339f, 0.2345f},
-    {-0.0721f, -0.7129f, 0.6976f, 0.2907f, 0.6540f, 0.6984f, -0.9541f, 0.2531f, 0.1600f},
-};
-/* Seconds of silence after which a wrist is fed the usual orientation alone. */
-#define SILENT_WRIST_SETTLE_S 4.0
-
 /* A model without the mask is fed a silent wrist's held sample turned about the vertical as far
  * as the pelvis turned since the wrist was last live: a hand held still in the room while the
  * body turns twists against the arm, one turned with the body keeps its pose relative to it (15
  * validation clips, 5 s gap: the pose 10.4 - 11.1 -> 9.3 - 9.9 deg, the silent hand 61 - 76 ->
- * 42 - 55 deg, new frames past 90 deg 450 / 741 -> 318 / 702). The longer it is silent, the less
- * that sample says about where the hand is now (an arm raised when the sensor dropped would stay
- * raised), so it turns towards the hand's usual orientation, reached after SILENT_WRIST_SETTLE_S
- * (the same clips: the pose 9.3 - 9.9 -> 9.05 - 9.25 deg, the hand 42 - 55 -> 38 - 46 deg, new
- * frames past 90 deg 318 / 702 -> 92 / 289; settling in 1 or 2 s, or halfway in 2 or 8 s, did
- * less). */
+ * 42 - 55 deg, new frames past 90 deg 450 / 741 -> 318 / 702). settle_silent_sensors then
+ * moves it on. */
 static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap_frame *f,
                                float *orientation)
 {
@@ -578,20 +565,61 @@ static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap
             ch->pelvis_heading_at[k] = pelvis_now;
             ch->have_pelvis_heading_at |= 1u << k;
         }
+        if (sf->state != MOCAP_SENSOR_SILENT) continue;
+        if (!(ch->have_pelvis_heading_at & (1u << k))) continue;
+        turn_about_vertical(orientation + k * 9, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
+    }
+}
+
+/* The usual orientation of a bone in the frame of the pelvis' heading: the chordal mean over
+ * every 4th training clip (python3 -m training usual-orientation). */
+static const float USUAL_LEFT_WRIST[9] = {-0.0718f, 0.8356f, -0.5446f, -0.3233f, 0.4970f,
+                                          0.8053f,  0.9436f, 0.2339f,  0.2345f};
+static const float USUAL_RIGHT_WRIST[9] = {-0.0721f, -0.7129f, 0.6976f, 0.2907f, 0.6540f,
+                                           0.6984f,  -0.9541f, 0.2531f, 0.1600f};
+static const float USUAL_HEAD[9] = {0.9984f, -0.0092f, -0.0555f, 0.0001f, 0.9871f,
+                                    -0.1602f, 0.0563f, 0.1599f, 0.9855f};
+/* Seconds of silence after which a settling sensor is fed its bone's usual orientation alone. */
+#define SILENT_SETTLE_S 4.0
+
+static const float *usual_orientation(int32_t segment)
+{
+    switch (segment) {
+    case MOCAP_SEGMENT_LEFT_WRIST: return USUAL_LEFT_WRIST;
+    case MOCAP_SEGMENT_RIGHT_WRIST: return USUAL_RIGHT_WRIST;
+    case MOCAP_SEGMENT_HEAD: return USUAL_HEAD;
+    default: return NULL;
+    }
+}
+
+/* The longer a sensor is silent, the less what it is fed (a wrist's held sample, the head as the
+ * model last posed it) says about where the bone is now: an arm raised when its sensor dropped
+ * stays raised, a head the model guesses from its own guesses wanders off. So a silent wrist or
+ * head of a model without the mask moves towards its bone's usual orientation relative to the
+ * pelvis' heading, reached after SILENT_SETTLE_S (15 validation clips, 5 s gap, the pose / the
+ * bone / new frames past 90 deg: wrists 9.25 - 9.92 -> 9.05 - 9.25 deg, 42 - 55 -> 38 - 46 deg,
+ * 318 / 702 -> 92 / 289; head 9.67 -> 9.08 deg, 43 -> 27 deg, 379 -> 6; settling in 0, 1 or 2 s,
+ * halfway, or arms hanging down did less). The shins, tied to the walking body, did not gain. */
+static void settle_silent_sensors(const mocap_solver *s, character *ch, const mocap_frame *f,
+                                  float *orientation)
+{
+    if (s->with_mask || s->pelvis_index < 0) return;
+    const float pelvis_now = bone_heading(orientation + s->pelvis_index * 9);
+    for (int k = 0; k < s->sensors; ++k) {
+        const float *usual_in_pelvis = usual_orientation(s->info.sensor_segments[k]);
+        const mocap_sensor_frame *sf = model_sensor(ch, f, k);
+        if (!usual_in_pelvis || !sf) continue;
         if (sf->state != MOCAP_SENSOR_SILENT) {
             ch->silent_frames[k] = 0;
             continue;
         }
-        if (!(ch->have_pelvis_heading_at & (1u << k))) continue;
-        float *m = orientation + k * 9;
-        turn_about_vertical(m, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
-
         if (ch->silent_frames[k] < INT32_MAX) ch->silent_frames[k]++;
-        double share = ch->silent_frames[k] * s->drift.dt / SILENT_WRIST_SETTLE_S;
+        double share = ch->silent_frames[k] * s->drift.dt / SILENT_SETTLE_S;
         if (share > 1.0) share = 1.0;
         float usual[9];
-        memcpy(usual, SILENT_WRIST_PRIOR[segment == MOCAP_SEGMENT_LEFT_WRIST ? 0 : 1], sizeof usual);
+        memcpy(usual, usual_in_pelvis, sizeof usual);
         turn_about_vertical(usual, pelvis_now);
+        float *m = orientation + k * 9;
         double from[4], to[4], q[4], r[9];
         if (skeleton_matrix_to_quat(m, from) != 0 || skeleton_matrix_to_quat(usual, to) != 0) continue;
         quat_slerp(q, from, to, share);
@@ -681,6 +709,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
                                 s->with_mask ? s->in_mask[nb] : NULL);
         turn_silent_pelvis(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb]);
         turn_silent_wrists(s, ch, frames[i], s->in_ori[nb]);
+        settle_silent_sensors(s, ch, frames[i], s->in_ori[nb]);
         s->tick_taken[i] = taken;
         s->batch_index[nb++] = i;
     }

@@ -1,17 +1,19 @@
-"""wrist-prior: where a hand usually is relative to the body, for a wrist sensor that fell silent.
+"""usual-orientation: where the hands and the head usually are relative to the body, for sensors
+that fell silent.
 
-    python3 -m training wrist-prior [--split train] [--every 4] [--frame-step 6]
+    python3 -m training usual-orientation [--split train] [--every 4] [--frame-step 6]
 
-A model without the sensor mask must be fed something while a wrist sensor is silent. Its held
-sample stays wherever the hand last was (an arm raised when the sensor dropped stays raised), so
-the engine turns it towards the hand's usual orientation over a few seconds. "Usual" is the mean
-orientation of each wrist bone (the joint the wrist sensor is read as) in the frame of the
-pelvis' heading: the rotation nearest, in the chordal sense, to every sample of the clips (the
-SVD projection of their mean matrix), measured on the training people only.
+A model without the sensor mask must be fed something while a sensor is silent. A wrist's held
+sample stays wherever the hand last was (an arm raised when the sensor dropped stays raised), and
+the head as the model last posed it wanders off, so the engine turns them towards their bone's
+usual orientation over a few seconds. "Usual" is the mean orientation of the bone (the joint the
+sensor is read as) in the frame of the pelvis' heading: the rotation nearest, in the chordal
+sense, to every sample of the clips (the SVD projection of their mean matrix), measured on the
+training people only.
 
-Prints the two rotations as the C initialisers of solver.c's SILENT_WRIST_PRIOR and how spread
-the orientations are (the mean matrix's singular values: 1 for a hand that never moves, 1/3 for
-one with no preferred orientation).
+Prints the rotations as the C initialisers of solver.c's USUAL_LEFT_WRIST, USUAL_RIGHT_WRIST and
+USUAL_HEAD, and how spread the orientations are (the mean matrix's singular values: 1 for a bone
+that never turns, 1/3 for one with no preferred orientation).
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from . import skeleton as sk
 from .cli import POSITIVE_INT
 from .errors import UsageError
 
-WRIST_JOINTS = {"left_wrist": 20, "right_wrist": 21}
+BONES = {"left_wrist": 20, "right_wrist": 21, "head": 15}   # segment -> the joint it is read as
 
 
 def heading_rotations(pelvis: np.ndarray) -> np.ndarray:
@@ -47,18 +49,18 @@ def nearest_rotation(m: np.ndarray) -> np.ndarray:
     return u @ np.diag([1.0, 1.0, np.linalg.det(u @ vt)]) @ vt
 
 
-def wrist_prior(motions, frame_step: int = 6) -> dict:
-    """{wrist: (mean rotation (3, 3), singular values of the mean matrix (3,))} over every
-    frame_step-th frame of the motions, each wrist bone with the pelvis' heading taken out."""
+def usual_orientations(motions, frame_step: int = 6, bones=BONES) -> dict:
+    """{segment: (mean rotation (3, 3), singular values of the mean matrix (3,))} over every
+    frame_step-th frame of the motions, each bone with the pelvis' heading taken out."""
     if not motions:
-        raise UsageError("no clips to measure the wrists on")
-    sums = {name: np.zeros((3, 3)) for name in WRIST_JOINTS}
+        raise UsageError("no clips to measure the bones on")
+    sums = {name: np.zeros((3, 3)) for name in bones}
     frames = 0
     for m in motions:
         g, _ = sk.forward_kinematics(m.local_rot[::frame_step].astype(np.float64),
                                      m.root_pos[::frame_step].astype(np.float64), m.offsets)
         unturn = np.swapaxes(heading_rotations(g[:, 0]), -1, -2)
-        for name, joint in WRIST_JOINTS.items():
+        for name, joint in bones.items():
             sums[name] += np.einsum("tab,tbc->ac", unturn, g[:, joint])
         frames += len(g)
     out = {}
@@ -84,11 +86,11 @@ def add_arguments(p):
 
 def main(args=None) -> int:
     if args is None or isinstance(args, list):
-        args = add_arguments(argparse.ArgumentParser(prog="python3 -m training wrist-prior")).parse_args(args)
+        args = add_arguments(argparse.ArgumentParser(prog="python3 -m training usual-orientation")).parse_args(args)
     from . import dataset
     motions = dataset.load_motions(args.split, progress=False)[::args.every]
-    prior = wrist_prior(motions, args.frame_step)
-    print(f"wrist-prior: {len(motions)} clips of split {args.split}, every {args.frame_step}th frame")
-    for name, (rotation, spread) in prior.items():
+    usual = usual_orientations(motions, args.frame_step)
+    print(f"usual-orientation: {len(motions)} clips of split {args.split}, every {args.frame_step}th frame")
+    for name, (rotation, spread) in usual.items():
         print(f"  {name}: {c_initialiser(rotation)}  (spread {', '.join(f'{v:.3f}' for v in spread)})")
     return 0

@@ -1,9 +1,10 @@
-"""training wrist-prior: each wrist's usual orientation with the pelvis' heading taken out, and
-the engine's copy of it.
+"""training usual-orientation: the hands' and head's usual orientation with the pelvis' heading
+taken out, and the engine's copy of it.
 
-Clips whose body turns while each hand keeps one orientation relative to the turned body (with
-a wobble about it) must give back that orientation whatever the turning; the pelvis' heading
-must be read as the engine reads it, tilted or not; and solver.c must hold two rotations."""
+Clips whose body turns while each hand and the head keep one orientation relative to the turned
+body (with a wobble about it) must give back that orientation whatever the turning; the pelvis'
+heading must be read as the engine reads it, tilted or not; and solver.c must hold the rotations
+the command prints."""
 import re
 from pathlib import Path
 
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from training import skeleton as sk, wrist_prior as wp
+from training import skeleton as sk, usual_orientation as uo
 from training.errors import UsageError
 
 SOLVER_C = Path(__file__).resolve().parents[2] / "Packages/com.mocap.imu/Native~/src/pose/solver.c"
@@ -21,15 +22,16 @@ def _ry(angle):
     return Rotation.from_euler("y", angle).as_matrix()
 
 
-def _turning_clip(seed, left, right, frames=600):
+def _turning_clip(seed, left, right, head=np.eye(3), frames=600):
     """A body turning about the vertical (its pelvis also pitching), each wrist at left / right
-    relative to the turned body, wobbling about it by up to 10 deg either way."""
+    and the head at head relative to the turned body, wobbling about it by up to 10 deg either
+    way."""
     rng = np.random.default_rng(seed)
     heading = np.cumsum(rng.normal(0.0, 0.05, frames)) + rng.uniform(-np.pi, np.pi)
     turned = _ry(heading)                                         # (T, 3, 3)
     glob = np.repeat(turned[:, None], sk.NUM_JOINTS, axis=1).copy()
     glob[:, 0] = turned @ Rotation.from_euler("x", rng.uniform(-0.5, 0.5, frames)).as_matrix()
-    for joint, usual in ((20, left), (21, right)):
+    for joint, usual in ((20, left), (21, right), (15, head)):
         wobble = Rotation.from_rotvec(np.radians(10.0) * np.stack(
             [np.sin(np.arange(frames) * 0.1 + joint), np.cos(np.arange(frames) * 0.13), np.zeros(frames)], -1))
         glob[:, joint] = turned @ usual @ wobble.as_matrix()
@@ -41,9 +43,10 @@ def _turning_clip(seed, left, right, frames=600):
 def test_the_usual_orientation_is_found_whatever_the_body_turns():
     left = Rotation.from_euler("zyx", [-70, 20, 10], degrees=True).as_matrix()
     right = Rotation.from_euler("zyx", [75, -30, 5], degrees=True).as_matrix()
-    prior = wp.wrist_prior([_turning_clip(s, left, right) for s in range(3)], frame_step=3)
-    for name, want in (("left_wrist", left), ("right_wrist", right)):
-        rotation, spread = prior[name]
+    head = Rotation.from_euler("x", 12, degrees=True).as_matrix()
+    usual = uo.usual_orientations([_turning_clip(s, left, right, head) for s in range(3)], frame_step=3)
+    for name, want in (("left_wrist", left), ("right_wrist", right), ("head", head)):
+        rotation, spread = usual[name]
         # the wobble is symmetric about the usual orientation, so the mean is it
         assert np.degrees(Rotation.from_matrix(rotation.T @ want).magnitude()) < 0.5, name
         assert np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-9)
@@ -56,7 +59,7 @@ def test_a_hand_that_points_everywhere_has_a_small_spread():
     glob, _ = sk.forward_kinematics(clip.local_rot.astype(np.float64), clip.root_pos, clip.offsets)
     glob[:, 20] = Rotation.random(len(glob), random_state=rng).as_matrix()
     clip.local_rot[:] = sk.global_to_local(glob)
-    _, spread = wp.wrist_prior([clip], frame_step=1)["left_wrist"]
+    _, spread = uo.usual_orientations([clip], frame_step=1)["left_wrist"]
     assert spread.max() < 0.1
 
 
@@ -65,23 +68,24 @@ def test_the_heading_is_read_as_the_engine_reads_it():
     for h in (-2.5, -0.3, 0.0, 1.2, 3.0):
         for pitch in (0.0, 0.6, 1.5, 1.8, -1.8):   # past 90 deg: bent over, read by the up axis
             pelvis = _ry(h) @ Rotation.from_euler("x", pitch).as_matrix()
-            got = wp.heading_rotations(pelvis[None])[0]
+            got = uo.heading_rotations(pelvis[None])[0]
             assert np.allclose(got, _ry(h), atol=1e-9), (h, pitch)
 
 
 def test_no_clips_is_an_error():
     with pytest.raises(UsageError, match="no clips"):
-        wp.wrist_prior([])
+        uo.usual_orientations([])
 
 
-def test_the_engine_holds_two_rotations():
+def test_the_engine_holds_the_rotations():
     text = SOLVER_C.read_text()
-    block = re.search(r"SILENT_WRIST_PRIOR\[2\]\[9\] = \{(.*?)\};", text, re.S)
-    assert block, "solver.c has no SILENT_WRIST_PRIOR"
-    values = [float(v) for v in re.findall(r"-?\d+\.\d+", block.group(1))]
-    assert len(values) == 18
-    for m in np.asarray(values).reshape(2, 3, 3):
-        assert np.allclose(m @ m.T, np.eye(3), atol=2e-4)
-        assert np.linalg.det(m) == pytest.approx(1.0, abs=3e-4)
-    printed = wp.c_initialiser(np.asarray(values[:9]).reshape(3, 3))
-    assert printed in text   # the command prints what the engine holds, to the digit
+    for name in ("USUAL_LEFT_WRIST", "USUAL_RIGHT_WRIST", "USUAL_HEAD"):
+        block = re.search(name + r"\[9\] = (\{.*?\});", text, re.S)
+        assert block, f"solver.c has no {name}"
+        values = [float(v) for v in re.findall(r"-?\d+\.\d+", block.group(1))]
+        assert len(values) == 9, name
+        m = np.asarray(values).reshape(3, 3)
+        assert np.allclose(m @ m.T, np.eye(3), atol=2e-4), name
+        assert np.linalg.det(m) == pytest.approx(1.0, abs=3e-4), name
+        # the command prints what the engine holds, to the digit
+        assert uo.c_initialiser(m) == re.sub(r"\s+", " ", block.group(1)), name
