@@ -844,18 +844,14 @@ def main(args=None) -> int:
         notes.append(f"The capture has {len(sensors)} sensors ({', '.join(sensors)}); the model's "
                      f"{', '.join(left_out)} is absent throughout (masked).")
     from .ort import model_info as read_model_info
-    if read_model_info(model).get("imu_mask"):
-        notes.append(f"The model (contract {contract}) reads the mask: the engine holds a silent "
-                     "sensor's last sample briefly, then feeds it masked (imu_mask 0, zero inputs) "
-                     "until it returns; a silent shin instead gets its bone as the model posed it "
-                     "in the frame before, at rest, marked present.")
-    else:
-        notes.append(f"The model (contract {contract}) reads no mask: until a silent sensor "
-                     "returns, the engine feeds a shin or the head its bone as the model posed it "
-                     "in the frame before, at rest (zero acceleration), and a wrist its last held "
-                     "sample turned about the vertical as far as the pelvis turned since; a wrist "
-                     "or the head moves over 4 s towards its bone's usual orientation (a model "
-                     "with the mask would get it masked, its inputs zero).")
+    masked = bool(read_model_info(model).get("imu_mask"))
+    notes.append(f"The model (contract {contract}) reads {'the' if masked else 'no'} mask: until a "
+                 "silent sensor returns, the engine feeds a shin or the head its bone as the model "
+                 "posed it in the frame before, at rest (zero acceleration), and a wrist its last "
+                 "held sample turned about the vertical as far as the pelvis turned since; a wrist "
+                 "or the head moves over 4 s towards its bone's usual orientation"
+                 + (" (all marked present: the mask, imu_mask 0 with zero inputs, is for a sensor "
+                    "the capture lacks)." if masked else "."))
     notes.append("A silent pelvis is never masked (every model reads the body in its frame): it is "
                  "fed its last sample turned about the vertical by the shins' mean heading change "
                  "since it was last live, at rest (zero acceleration).")

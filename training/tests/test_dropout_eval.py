@@ -287,7 +287,7 @@ def test_a_contract_two_model_runs_on_seven_sensors_and_on_six_without_its_optio
     text = out7.read_text()
     assert re.search(r"^\| chest \| [\d.]+ \|", text, re.M), text
     assert "--sensors" not in text.split("Made by:")[1].split("\n\n")[1]
-    assert "contract 2" in text and "masked (imu_mask 0, zero inputs)" in text
+    assert "contract 2" in text and "reads the mask" in text and "marked present" in text
     truth = np.load(next(next(keep7.iterdir()).glob("*-chest.cap")).with_suffix(".truth.npz"))
     assert list(truth["sensors"]) == list(seven) and list(truth["silences"]) == ["chest@5.0+2.0"]
 

@@ -146,16 +146,14 @@ int solver_frame_input(const mocap_frame *f, const int8_t *slot_of, int sensors,
         const mocap_sensor_frame *sf = slot >= 0 && slot < (int)f->sensor_count ? &f->sensors[slot]
                                                                                : NULL;
         /* Contract 1 has no way to say "missing": its sensors are all required, so a slot
-         * always exists and a silent sensor is fed its held value, as the frame carries it. */
+         * always exists and a silent sensor is fed its held value, as the frame carries it. A
+         * masked model is told "missing" only for a sensor it has nothing of (absent from the
+         * session, never sent, or uncalibrated): a silent one is fed its held value too, which
+         * the stand-ins below replace, since they served even a model trained with sensors
+         * dropping out better than the mask did (stand_in_silent_sensors). */
         int present = sf != NULL;
-        if (with_mask && sf) {
-            /* The pelvis sets the frame the model reads every other sensor in: no model can do
-             * without it, so a silent pelvis is fed its held value, as contract 1 feeds every
-             * silent sensor, rather than inputs the model never learnt to read. */
-            const int live = sf->state == MOCAP_SENSOR_FRESH || sf->state == MOCAP_SENSOR_HOLDING ||
-                             (sf->state == MOCAP_SENSOR_SILENT && sf->segment == MOCAP_SEGMENT_PELVIS);
-            present = (sf->flags & MOCAP_SENSOR_CALIBRATED) && live;
-        }
+        if (with_mask && sf)
+            present = (sf->flags & MOCAP_SENSOR_CALIBRATED) && sf->state != MOCAP_SENSOR_ABSENT;
         if (mask) mask[k] = present ? 1.0f : 0.0f;
         if (!present) {
             memset(orientation + k * 9, 0, 9 * sizeof(float));
@@ -432,7 +430,7 @@ static void keep_sensor_bones(const mocap_solver *s, character *ch, const double
     ch->have_bones = 1;
 }
 
-/* A model without the mask cannot be told a sensor is missing. A silent shin or head (or any
+/* A silent sensor is fed a stand-in, by every model. A silent shin or head (or any
  * sensor but the pelvis and the wrists) is fed its bone as the model posed it in the frame
  * before, at rest, instead of its last sample, which stays put while the body moves on: legs and
  * head follow the body, and the model's own guess of them is better than the stale sample (15
@@ -440,31 +438,26 @@ static void keep_sensor_bones(const mocap_solver *s, character *ch, const double
  * the head; the pose's 10.3-10.5 -> 9.0-9.4 and 10.1 -> 9.7 deg). A hand moves on its own: fed
  * the model's guess the arm wanders further (shoulders more often past 90 deg), so a wrist keeps
  * its held sample, turned with the body (turn_silent_wrists). The pelvis is every other sensor's
- * frame: turn_silent_pelvis.
- * A masked model is told a silent sensor is missing, yet a silent shin is better fed the same
- * way and marked present: the legs it learnt without a shin stray further than its own guess
- * of that shin (seven-sensor model, 15 validation clips, 5 s gap, six sensors: the pose 10.5-10.6
- * -> 9.1-9.4 deg, the shin 36 -> 15-18 deg, new frames past 90 deg 62 / 38 -> 18 / 17). Its
- * head and wrists stay masked: fed the pose, the head did worse (9.7 -> 10.4 deg). */
-static int stands_in_from_the_pose(const mocap_solver *s, int32_t segment)
+ * frame: turn_silent_pelvis. A wrist or head then settles (settle_silent_sensors).
+ * A masked model, trained with sensors dropping out, could be told a silent sensor is missing
+ * instead, but did better fed the same stand-ins (seven-sensor model, 15 validation clips, 5 s
+ * gap, six sensors, angle in the gap / the silent bone's error / new frames past 90 deg: shins
+ * 10.5-10.6 / 36 / 62, 38 -> 9.1-9.4 / 15-18 / 18, 17; wrists 9.40, 9.48 / 42, 49 / 177, 382 ->
+ * 9.25, 9.54 / 38, 47 / 82, 264; head 9.67 / 34 / 14 -> 9.48 / 28 / 17). The mask is left for
+ * sensors there is nothing of (silent_sensor_fed: mask 0 skips them). */
+static int silent_sensor_fed(const mocap_sensor_frame *sf, const float *mask, int k)
 {
-    if (segment == MOCAP_SEGMENT_PELVIS || segment == MOCAP_SEGMENT_LEFT_WRIST ||
-        segment == MOCAP_SEGMENT_RIGHT_WRIST)
-        return 0;
-    return !s->with_mask || segment == MOCAP_SEGMENT_LEFT_SHIN || segment == MOCAP_SEGMENT_RIGHT_SHIN;
+    return sf && sf->state == MOCAP_SENSOR_SILENT && (!mask || mask[k] != 0.0f);
 }
 
 static void stand_in_silent_sensors(const mocap_solver *s, const character *ch, const mocap_frame *f,
-                                    float *orientation, float *acceleration, float *mask)
+                                    float *orientation, float *acceleration, const float *mask)
 {
     for (int k = 0; k < s->sensors; ++k) {
         const mocap_sensor_frame *sf = model_sensor(ch, f, k);
-        if (!sf || sf->state != MOCAP_SENSOR_SILENT || !stands_in_from_the_pose(s, sf->segment)) continue;
-        if (s->with_mask) {
-            /* Only a sensor the model was reading before it fell silent. */
-            if (!ch->have_bones || !(sf->flags & MOCAP_SENSOR_CALIBRATED)) continue;
-            mask[k] = 1.0f;
-        }
+        if (!silent_sensor_fed(sf, mask, k) || sf->segment == MOCAP_SEGMENT_PELVIS ||
+            sf->segment == MOCAP_SEGMENT_LEFT_WRIST || sf->segment == MOCAP_SEGMENT_RIGHT_WRIST)
+            continue;
         if (ch->have_bones) memcpy(orientation + k * 9, ch->bone_rot[k], 9 * sizeof(float));
         memset(acceleration + k * 3, 0, 3 * sizeof(float));
     }
@@ -546,16 +539,16 @@ static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap
     turn_about_vertical(orientation + pelvis * 9, atan2(sx, cx));
 }
 
-/* A model without the mask is fed a silent wrist's held sample turned about the vertical as far
+/* A silent wrist is fed its held sample turned about the vertical as far
  * as the pelvis turned since the wrist was last live: a hand held still in the room while the
  * body turns twists against the arm, one turned with the body keeps its pose relative to it (15
  * validation clips, 5 s gap: the pose 10.4 - 11.1 -> 9.3 - 9.9 deg, the silent hand 61 - 76 ->
  * 42 - 55 deg, new frames past 90 deg 450 / 741 -> 318 / 702). settle_silent_sensors then
  * moves it on. */
 static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap_frame *f,
-                               float *orientation)
+                               float *orientation, const float *mask)
 {
-    if (s->with_mask || s->pelvis_index < 0) return;
+    if (s->pelvis_index < 0) return;
     const float pelvis_now = bone_heading(orientation + s->pelvis_index * 9);
     for (int k = 0; k < s->sensors; ++k) {
         const int32_t segment = s->info.sensor_segments[k];
@@ -565,8 +558,7 @@ static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap
             ch->pelvis_heading_at[k] = pelvis_now;
             ch->have_pelvis_heading_at |= 1u << k;
         }
-        if (sf->state != MOCAP_SENSOR_SILENT) continue;
-        if (!(ch->have_pelvis_heading_at & (1u << k))) continue;
+        if (!silent_sensor_fed(sf, mask, k) || !(ch->have_pelvis_heading_at & (1u << k))) continue;
         turn_about_vertical(orientation + k * 9, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
     }
 }
@@ -595,21 +587,21 @@ static const float *usual_orientation(int32_t segment)
 /* The longer a sensor is silent, the less what it is fed (a wrist's held sample, the head as the
  * model last posed it) says about where the bone is now: an arm raised when its sensor dropped
  * stays raised, a head the model guesses from its own guesses wanders off. So a silent wrist or
- * head of a model without the mask moves towards its bone's usual orientation relative to the
+ * head moves towards its bone's usual orientation relative to the
  * pelvis' heading, reached after SILENT_SETTLE_S (15 validation clips, 5 s gap, the pose / the
  * bone / new frames past 90 deg: wrists 9.25 - 9.92 -> 9.05 - 9.25 deg, 42 - 55 -> 38 - 46 deg,
  * 318 / 702 -> 92 / 289; head 9.67 -> 9.08 deg, 43 -> 27 deg, 379 -> 6; settling in 0, 1 or 2 s,
  * halfway, or arms hanging down did less). The shins, tied to the walking body, did not gain. */
 static void settle_silent_sensors(const mocap_solver *s, character *ch, const mocap_frame *f,
-                                  float *orientation)
+                                  float *orientation, const float *mask)
 {
-    if (s->with_mask || s->pelvis_index < 0) return;
+    if (s->pelvis_index < 0) return;
     const float pelvis_now = bone_heading(orientation + s->pelvis_index * 9);
     for (int k = 0; k < s->sensors; ++k) {
         const float *usual_in_pelvis = usual_orientation(s->info.sensor_segments[k]);
         const mocap_sensor_frame *sf = model_sensor(ch, f, k);
         if (!usual_in_pelvis || !sf) continue;
-        if (sf->state != MOCAP_SENSOR_SILENT) {
+        if (!silent_sensor_fed(sf, mask, k)) {
             ch->silent_frames[k] = 0;
             continue;
         }
@@ -705,11 +697,11 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
             hold_pose(s, c, frames[i], taken);
             continue;
         }
-        stand_in_silent_sensors(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb],
-                                s->with_mask ? s->in_mask[nb] : NULL);
+        const float *mask = s->with_mask ? s->in_mask[nb] : NULL;
+        stand_in_silent_sensors(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb], mask);
         turn_silent_pelvis(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb]);
-        turn_silent_wrists(s, ch, frames[i], s->in_ori[nb]);
-        settle_silent_sensors(s, ch, frames[i], s->in_ori[nb]);
+        turn_silent_wrists(s, ch, frames[i], s->in_ori[nb], mask);
+        settle_silent_sensors(s, ch, frames[i], s->in_ori[nb], mask);
         s->tick_taken[i] = taken;
         s->batch_index[nb++] = i;
     }
