@@ -18,7 +18,8 @@ as at the start of every engine session) and for long runs with a warm state; a 
 Missing sensors (a masked network, model contract 2: --sensors, --optional, --sensor-dropout): each
 clip a stream plays lacks each optional sensor with probability --optional-absent, and with
 probability --sensor-dropout one present non-pelvis sensor goes silent for a window of
---dropout-seconds; a missing sensor has mask 0 and zero inputs, as the engine feeds it (SensorMasking).
+--dropout-seconds; a missing sensor has mask 0 and zero inputs, as the engine feeds a sensor it
+has nothing of (SensorMasking; a silent one the engine now stands in for instead).
 
 Losses per frame: rotation (Frobenius distance of the 24 matrices, local, joint 0 global: the
 chordal distance 2 sqrt(2) sin(angle / 2), which grows like the angle the metric averages; the
@@ -163,7 +164,10 @@ def pick_device(name: str) -> torch.device:
 
 # ------------------------------------------------------------------------------ data
 # The engine holds a sensor that stops sending for its stale_after_s (mocap_session_config,
-# default 0.25 s: mask 1, the last sample repeated) and only then feeds it as missing.
+# default 0.25 s: mask 1, the last sample repeated). Training then feeds it as missing; the engine
+# now feeds a stand-in instead (solver.c, stand_in_silent_sensors), which served the one model
+# trained this way better than the mask, though training cannot reproduce it (it needs the
+# network's own previous pose).
 ENGINE_STALE_AFTER_S = 0.25
 
 
@@ -172,8 +176,8 @@ class SensorMasking:
     """Which sensors a masked network's training clips lack, drawn per clip: each optional sensor
     is absent from the whole clip with probability optional_absent; with probability
     window_probability one present non-pelvis sensor stops sending for a window of
-    U(window_seconds) s, which the engine first holds (ENGINE_STALE_AFTER_S) and then feeds as
-    missing. Missing frames have mask 0 and zero inputs, as the engine feeds them."""
+    U(window_seconds) s, first held (ENGINE_STALE_AFTER_S) and then missing. Missing frames have
+    mask 0 and zero inputs, as the engine feeds a sensor it has nothing of."""
     sensors: tuple
     optional: tuple = ()
     optional_absent: float = 0.5

@@ -3,7 +3,7 @@ that fell silent.
 
     python3 -m training usual-orientation [--split train] [--every 4] [--frame-step 6]
 
-A model without the sensor mask must be fed something while a sensor is silent. A wrist's held
+A model must be fed something while a sensor is silent. A wrist's held
 sample stays wherever the hand last was (an arm raised when the sensor dropped stays raised), and
 the head as the model last posed it wanders off, so the engine turns them towards their bone's
 usual orientation over a few seconds. "Usual" is the mean orientation of the bone (the joint the

@@ -213,7 +213,7 @@ def test_a_short_run_through_mocapctl_has_the_gap_where_it_was_put(tmp_path):
                     "--segments", "right_wrist", "--out", str(out), "--keep", str(keep)]) == 0
     text = out.read_text()
     assert "python3 -m training missing-sensor --procedural --clips 1 --clip-seconds 10 --seconds 2" in text
-    # the default model (contract 3, no masked features) gets a silent sensor's held values
+    # the default model (contract 3, no masked features) gets stand-ins for a silent sensor
     assert "(contract 3) reads no mask" in text and "as the model posed it" in text
     assert "turned about the vertical by the shins' mean heading change" in text
     assert re.search(r"^\| none \| [\d.]+ \|", text, re.M), text

@@ -3,8 +3,8 @@ taken out, and the engine's copy of it.
 
 Clips whose body turns while each hand and the head keep one orientation relative to the turned
 body (with a wobble about it) must give back that orientation whatever the turning; the pelvis'
-heading must be read as the engine reads it, tilted or not; and solver.c must hold the rotations
-the command prints."""
+heading must be read as the engine reads it, tilted or not; and solver.c must hold rotations in
+the form the command prints."""
 import re
 from pathlib import Path
 
@@ -87,5 +87,6 @@ def test_the_engine_holds_the_rotations():
         m = np.asarray(values).reshape(3, 3)
         assert np.allclose(m @ m.T, np.eye(3), atol=2e-4), name
         assert np.linalg.det(m) == pytest.approx(1.0, abs=3e-4), name
-        # the command prints what the engine holds, to the digit
+        # the command prints in solver.c's format, so its output can replace these as they stand
+        # (whether they are still today's means needs the CMU clips: run the command)
         assert uo.c_initialiser(m) == re.sub(r"\s+", " ", block.group(1)), name

@@ -547,11 +547,12 @@ MOCAP_API mocap_status mocap_solver_config_defaults(mocap_solver_config *config)
 /* config may be NULL. The model must stay open while the solver lives. A character's session
  * must carry every sensor the model requires (by segment; refused naming the missing segment);
  * a model's optional sensor the session lacks is always fed as missing. A model with the mask
- * (contract 2, or 3 with masked features) gets 1 for a sensor that is calibrated and fresh or
- * holding, else 0 with zero inputs. A model without it is fed a silent shin or head as its bone
- * in the model's previous pose, at rest, and a silent wrist as its last sample turned about the
- * vertical as far as the pelvis turned since. A silent pelvis
- * (never masked: every model reads the body in its frame) is fed its last sample turned about
+ * (contract 2, or 3 with masked features) gets 0 with zero inputs for a sensor it has nothing of
+ * (not in the session, never sent, uncalibrated), else 1. A silent sensor gets a stand-in, the
+ * same for every model: a shin or the head its bone in the model's previous pose, at rest; a
+ * wrist its last sample turned about the vertical as far as the pelvis turned since; a wrist or
+ * the head then moves over 4 s towards the bone's usual orientation relative to the pelvis'
+ * heading; the pelvis (every model reads the body in its frame) its last sample turned about
  * the vertical as far as the shins turned since, at rest. */
 MOCAP_API mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *config,
                                          mocap_solver **out);

@@ -1724,10 +1724,12 @@ namespace {
 void expect_silent_sensors_stood_in(mocap_model *model, bool masked)
 {
     std::string cap = test_temp_path("silences.cap");
-    synth_config cfg = short_capture(91, 3.0, "turn", cap, false,
+    // the wrist twice: its settling starts again from its own held sample the second time
+    synth_config cfg = short_capture(91, 4.0, "turn", cap, false,
                                      {{MOCAP_SEGMENT_LEFT_SHIN, 1.0, 1.2},
                                       {MOCAP_SEGMENT_HEAD, 1.0, 1.2},
-                                      {MOCAP_SEGMENT_RIGHT_WRIST, 1.0, 1.2}});
+                                      {MOCAP_SEGMENT_RIGHT_WRIST, 1.0, 1.2},
+                                      {MOCAP_SEGMENT_RIGHT_WRIST, 2.8, 0.8}});
     SilenceTap tap;
     std::vector<std::vector<mocap_pose>> poses(1, solve_replay_tapped(model, cap, cfg, tap));
     ASSERT_FALSE(poses[0].empty());
@@ -1756,6 +1758,7 @@ void expect_silent_sensors_stood_in(mocap_model *model, bool masked)
             const bool silent = f.state[k] == MOCAP_SENSOR_SILENT;
             if (!silent) {
                 ++live_frames;
+                if (k == wrist) wrist_silent_frames = 0;
                 for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], f.measured[k][i], 1e-6) << k;
                 if (k == wrist && f.state[k] == MOCAP_SENSOR_FRESH) pelvis_when_wrist_live = heading(f.orientation[0]);
                 continue;
@@ -1802,7 +1805,7 @@ void expect_silent_sensors_stood_in(mocap_model *model, bool masked)
     }
     EXPECT_GT(silent_frames, 2 * 50);  // both, most of 1.2 s at 60 Hz
     EXPECT_GT(wrist_turn, 10.0 * 3.14159265358979 / 180.0) << "the body turned while the wrist was silent";
-    EXPECT_GT(max_share, 0.2) << "the wrist was silent long enough to move towards its usual orientation";
+    EXPECT_GT(max_share, 0.15) << "the wrist was silent long enough to move towards its usual orientation";
     EXPECT_GT(live_frames, 6 * 100);
     // the wrist's held acceleration is its last sample, not zero
     bool wrist_accelerates = false;

@@ -545,10 +545,16 @@ static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap
  * validation clips, 5 s gap: the pose 10.4 - 11.1 -> 9.3 - 9.9 deg, the silent hand 61 - 76 ->
  * 42 - 55 deg, new frames past 90 deg 450 / 741 -> 318 / 702). settle_silent_sensors then
  * moves it on. */
+/* The pelvis' heading is every turn's reference: nothing to turn by when it is not fed. */
+static int pelvis_fed(const mocap_solver *s, const float *mask)
+{
+    return s->pelvis_index >= 0 && (!mask || mask[s->pelvis_index] != 0.0f);
+}
+
 static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap_frame *f,
                                float *orientation, const float *mask)
 {
-    if (s->pelvis_index < 0) return;
+    if (!pelvis_fed(s, mask)) return;
     const float pelvis_now = bone_heading(orientation + s->pelvis_index * 9);
     for (int k = 0; k < s->sensors; ++k) {
         const int32_t segment = s->info.sensor_segments[k];
@@ -595,7 +601,7 @@ static const float *usual_orientation(int32_t segment)
 static void settle_silent_sensors(const mocap_solver *s, character *ch, const mocap_frame *f,
                                   float *orientation, const float *mask)
 {
-    if (s->pelvis_index < 0) return;
+    if (!pelvis_fed(s, mask)) return;
     const float pelvis_now = bone_heading(orientation + s->pelvis_index * 9);
     for (int k = 0; k < s->sensors; ++k) {
         const float *usual_in_pelvis = usual_orientation(s->info.sensor_segments[k]);

@@ -30,9 +30,9 @@ int model_has_mask(const mocap_model *model);
 /* A calibrated frame as the inputs of a model with `sensors` sensors: model sensor k is the
  * frame's sensor slot_of[k] (-1: none). orientation [N][3][3] (bone -> model, row-major) from
  * bone_orientation, acceleration [N][3] from bone_acceleration. with_mask (contract 2): a sensor
- * that is missing, uncalibrated or silent gets mask 0 and zero inputs, the others mask 1 (a
- * silent pelvis keeps its held value and mask 1: every model reads the body in its frame); mask
- * may be NULL. Returns 0, or -1 when a value fed is NaN/Inf or a quaternion is zero (nothing of
+ * that is missing, has never sent or is uncalibrated gets mask 0 and zero inputs, the others
+ * mask 1 (a silent one its held value, which the solver's stand-ins then replace); mask may be
+ * NULL. Returns 0, or -1 when a value fed is NaN/Inf or a quaternion is zero (nothing of
  * that frame may reach the model). */
 int solver_frame_input(const mocap_frame *frame, const int8_t *slot_of, int sensors, int with_mask,
                        float *orientation, float *acceleration, float *mask);
