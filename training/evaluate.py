@@ -443,13 +443,17 @@ def truth_jitter(clips) -> float:
 
 # ------------------------------------------------------------------------------ latency / params
 def measure_latency(model_path, frames=1800, seed=0) -> dict:
-    """ONNX Runtime, one character, T = 1 per call, one intra-op thread (mocapctl infer)."""
-    from .ort import run_onnx
+    """ONNX Runtime, one character, T = 1 per call, one intra-op thread (mocapctl infer), every
+    sensor of the model present."""
+    from .ort import model_info, run_onnx
+    info = model_info(model_path)
+    sensors = tuple(info.get("sensor_order", ",".join(DEFAULT_SENSORS)).split(","))
     m = __import__("training.procedural", fromlist=["make_motion"]).make_motion(
         "mixed", frames / sk.MODEL_FPS, seed=seed)
-    clip = synthesize_clip(m, np.random.default_rng(seed))
+    clip = synthesize_clip(m, np.random.default_rng(seed), sensors=sensors)
+    mask = np.ones((1,) + clip.imu_orientation.shape[:2], np.float32) if info.get("imu_mask") else None
     r = run_onnx(model_path, clip.imu_orientation[None], clip.imu_acceleration[None], stream=True,
-                 threads=1, timing=True)
+                 threads=1, timing=True, mask=mask)
     timing = r["timing"]
     timing["cpus"] = os.cpu_count()
     timing["load"] = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")

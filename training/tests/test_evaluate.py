@@ -355,3 +355,18 @@ def test_an_unusable_clip_in_the_folder_is_one_line_naming_it(tmp_path, fixture_
     assert rc == 1 and "Traceback" not in err
     assert f"{victim}: the bone" in err and "zero length" in err, err
     assert not (tmp_path / "r" / "evaluation.md").exists()
+
+
+@pytest.mark.skipif(not ort.onnx_runtime_available(),
+                    reason="ONNX Runtime not available (scripts/fetch_onnxruntime.sh)")
+@pytest.mark.parametrize("geometry", ["graph", "engine"])
+def test_latency_is_timed_on_the_models_own_sensors(tmp_path, geometry):
+    """A seven-sensor masked model (graph or network-only file) is timed on seven sensors with its
+    mask, not on the default six, which mocapctl would refuse."""
+    from training import export
+    seven = se.DEFAULT_SENSORS + ("chest",)
+    cfg = ModelConfig(32, 32, 1, 32, anchored=True, sensors=seven, optional=("chest",), masked=True)
+    export.export(export.untrained_model(seed=0, config=cfg), tmp_path / "m", check=False,
+                  geometry=geometry)
+    timing = ev.measure_latency(tmp_path / "m" / export.FP32_NAME, frames=90)
+    assert timing["calls"] == 90 and timing["p50_us"] > 0
