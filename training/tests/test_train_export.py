@@ -354,6 +354,8 @@ def test_ctrl_c_finishes_the_step_saves_and_resumes_exactly(tmp_path, monkeypatc
     train_m = _motions(4, 0)
 
     tr.train(_nine_step_run(tmp_path, "whole"), train_m, [])
+    # the handler the run found (a shell's background job starts with SIGINT ignored)
+    handler_before = signal.getsignal(signal.SIGINT)
     calls = []
     real_next = tr.StreamBatcher.next
 
@@ -368,7 +370,7 @@ def test_ctrl_c_finishes_the_step_saves_and_resumes_exactly(tmp_path, monkeypatc
     with pytest.raises(CommandError, match="interrupted .* after step 4: .*last.pt saved"):
         tr.train(cut, train_m, [])
     monkeypatch.setattr(tr.StreamBatcher, "next", real_next)
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # handler given back
+    assert signal.getsignal(signal.SIGINT) is handler_before   # handler given back
     ck = torch.load(str(tmp_path / "cut" / "ck" / "last.pt"), weights_only=False)
     assert ck["step"] == 4
     assert tr.train(replace(cut, resume=True), train_m, [])["steps"] == 9
