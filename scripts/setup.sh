@@ -10,7 +10,7 @@ PACKAGES=(
   libhidapi-dev                      # HID-class receivers
   clang-14 libclang-rt-14-dev        # libFuzzer + ThreadSanitizer runtime
   python3 python3-numpy python3-pytest
-  python3-torch python3-onnx python3-tqdm python3-matplotlib   # training/
+  python3-torch python3-onnx python3-tqdm python3-matplotlib python3-scipy   # training/
   libopenblas0-pthread               # torch on the CPU is ~10x slower with the reference BLAS
   liblo-tools                        # oscdump: a real OSC receiver for interop tests
   gcc-mingw-w64-x86-64-win32         # checks that the engine compiles for Windows

@@ -1,7 +1,8 @@
 """python3 -m training <command>: the pose model's tooling, from motion data to the shipped ONNX.
 
 Commands: prepare | pack | train | average | export | quantize | evaluate | sensor-gain |
-synth-capture | missing-sensor | engine-eval | smoothing-study | cv | stride-scaling | usual-orientation | tip-model.
+synth-capture | missing-sensor | engine-eval | smoothing-study | cv | stride-scaling | usual-orientation | pose-range |
+tip-model.
 
 Each subcommand imports its module lazily, so --help works while a module is missing."""
 from __future__ import annotations
@@ -26,6 +27,7 @@ COMMANDS = {
     "cv": ("cross_validate", "a training recipe scored by cross-validation over subject folds"),
     "stride-scaling": ("stride_scaling", "how the root speed follows body size: the height input's exponent"),
     "usual-orientation": ("usual_orientation", "the hands' and head's usual orientation, for silent sensors (solver.c)"),
+    "pose-range": ("pose_range", "the joints' range of motion and speed, to tell a broken pose from a wrong one"),
     "tip-model": ("tip_model", "TIP-shaped ONNX network, random weights (mocapctl bench tip)"),
 }
 

@@ -288,11 +288,14 @@ def extracted_cmu() -> Path:
 
 
 def load_motions(source="train", cache: bool = True, elbow: str = "repair", workers=None,
-                 progress: bool = True, force: bool = False, cache_dir=None, split=None) -> list:
+                 progress: bool = True, force: bool = False, cache_dir=None, split=None,
+                 every: int = 1) -> list:
     """Motions (60 Hz, our skeleton) of a split of the extracted CMU data ("train", "val",
     "test"), or of a BVH folder (a path: with manifest.csv, its ok rows; else every *.bvh), or of
-    a motion pack file (motion_pack.py), in clip order. Converted clips are cached as npz under
-    training/data/cache."""
+    a motion pack file (motion_pack.py), in clip order; every: only every Nth clip (the others are
+    neither read nor converted). Converted clips are cached as npz under training/data/cache."""
+    if every < 1:
+        raise ValueError("every must be 1 or more")
     if elbow not in ("repair", "exclude"):
         raise ValueError("elbow must be 'repair' or 'exclude'")
     if isinstance(source, str) and source in SPLITS:
@@ -302,8 +305,8 @@ def load_motions(source="train", cache: bool = True, elbow: str = "repair", work
         from .motion_pack import is_pack, read_pack
         if is_pack(root):   # already retargeted (motion_pack.py): nothing to convert or cache
             motions = read_pack(root)
-            return [m for m in motions if split is None or split_of(m.subject) == split]
-    clips = list_clips(root, split, elbow)
+            return [m for m in motions if split is None or split_of(m.subject) == split][::every]
+    clips = list_clips(root, split, elbow)[::every]
     res = _run(clips, cache, force, workers, progress, True, cache_dir, "loading")
     out = []
     for clip, *_ in clips:

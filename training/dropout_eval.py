@@ -24,11 +24,17 @@ Per condition (frames of all clips; windows in motion time):
              mean root-aligned joint speed; bone: the silent bone's angular speed) moves at less
              than FREEZE_RATIO of the truth's speed while the truth moves (speeds averaged over
              SMOOTH_S); for the bone also in the "none" run
-  explode    frames with a NaN, a joint angle error over EXPLODE_ANGLE_DEG or a root step over
-             EXPLODE_ROOT_STEP_M in one frame, in the gap and the window after it; also those
-             that do not explode in the "none" run (a hard clip's error can pass 90 deg with every
-             sensor), by cause: the pelvis's global rotation (a wrong heading), another joint,
-             the root step, a NaN
+  broken     frames whose pose is not one a person takes, judged on the pose alone (pose_range.py:
+             the training people's motion capture): a joint rotated out of its range or turning
+             faster than people's do, a NaN, or a root step over EXPLODE_ROOT_STEP_M in one frame,
+             in the gap and the window after it; also those that are not broken in the "none" run,
+             by cause, and the joints that broke
+  far off    frames with a NaN, a joint angle error over EXPLODE_ANGLE_DEG or a root step over
+             EXPLODE_ROOT_STEP_M in one frame (the truth's pose is needed to tell: an arm posed
+             hanging while the person's was raised is far off but not broken), the same windows;
+             also those that are not far off in the "none" run (a hard clip's error can pass 90
+             deg with every sensor), by cause: the pelvis's global rotation (a wrong heading),
+             another joint, the root step, a NaN
   recovery   seconds from the gap's end until the angle and position errors (averaged over
              SMOOTH_S, frames after the gap only) are within RECOVERED_WITHIN of the "none" run's
              (plus a small absolute slack) and stay there for RECOVERY_HOLD_S; "never" when they
@@ -56,6 +62,7 @@ import numpy as np
 from . import skeleton as sk
 from .cli import POSITIVE_INT, NON_NEGATIVE_INT, number_type, sensor_option
 from .errors import CommandError, UsageError
+from .pose_range import OUT_OF_RANGE_DEG, SPEED_MARGIN, TOO_FAST_QUANTILE
 from .sensors import DEFAULT_SENSORS, node_ids, sensor_bones
 
 REPO = Path(__file__).resolve().parent.parent
@@ -145,6 +152,25 @@ def explosion_causes(angle_err, pred_root, finite) -> dict:
     return {"pelvis": angle_err[:, 0] > EXPLODE_ANGLE_DEG,
             "joint": np.any(angle_err[:, 1:] > EXPLODE_ANGLE_DEG, axis=-1),
             "root": ~(step <= EXPLODE_ROOT_STEP_M), "nan": nan}
+
+
+BROKEN_CAUSES = ("range", "speed", "root", "nan")
+
+
+def broken_causes(pose_range, pred_local, pred_root, finite, fps: float) -> tuple:
+    """Per frame, each cause of a broken pose ("range": a joint out of the pose range, "speed": a
+    joint turning too fast, "root": a root step over EXPLODE_ROOT_STEP_M, "nan"), and (T, 24) the
+    joints out of range or too fast."""
+    finite = np.asarray(finite, bool)
+    bad = pose_range.implausible(pred_local, fps)
+    out_of_range = bad["range"] & finite[:, None]
+    too_fast = bad["speed"] & finite[:, None]
+    root = np.asarray(pred_root, np.float64)
+    step = np.zeros(len(root))
+    step[1:] = np.linalg.norm(np.diff(root, axis=0), axis=-1)
+    causes = {"range": out_of_range.any(axis=-1), "speed": too_fast.any(axis=-1),
+              "root": ~(step <= EXPLODE_ROOT_STEP_M), "nan": ~finite}
+    return causes, out_of_range | too_fast
 
 
 def exploded_frames(angle_err, pred_root, finite) -> np.ndarray:
@@ -341,6 +367,11 @@ class ConditionScore:
     explode_extra: int = 0       # gap + after, not exploding in the "none" run
     explode_extra_causes: dict = field(default_factory=dict)   # cause -> frames of explode_extra
     explode_extra_joints: dict = field(default_factory=dict)   # joint -> new frames over the angle
+    broken: int | None = None    # frames, gap + after (None: not measured, no pose range)
+    broken_elsewhere: int | None = None
+    broken_extra: int | None = None   # gap + after, not broken in the "none" run
+    broken_extra_causes: dict = field(default_factory=dict)    # cause -> frames of broken_extra
+    broken_extra_joints: dict = field(default_factory=dict)    # joint -> new broken frames
     recovery: float = math.nan   # s (inf: never)
     incomplete_in_gap: int = 0
     incomplete_extra: int = 0    # flagged outside the gap beyond the "none" run
@@ -350,8 +381,10 @@ class ConditionScore:
 
 
 def score_condition(clip: str, condition: str, run: Run, err: FrameErrors, windows: Windows,
-                    ref: tuple | None = None, bone: int | None = None) -> ConditionScore:
-    """The scores of one run; ref = (Run, FrameErrors) of the clip's "none" run (same frames)."""
+                    ref: tuple | None = None, bone: int | None = None,
+                    pose_range=None) -> ConditionScore:
+    """The scores of one run; ref = (Run, FrameErrors) of the clip's "none" run (same frames);
+    pose_range (pose_range.PoseRange): what a broken pose is (without one, none is counted)."""
     m = windows.masks(run.t)
     per_frame_angle = np.nanmean(err.angle, axis=-1) if len(err.angle) else np.zeros(0)
     windows3 = ("gap", "after", "elsewhere")
@@ -364,6 +397,11 @@ def score_condition(clip: str, condition: str, run: Run, err: FrameErrors, windo
     causes = explosion_causes(err.angle, run.pred_root, run.finite)
     exploded = np.logical_or.reduce([causes[c] for c in EXPLODE_CAUSES])
     s.explode, s.explode_elsewhere = int(exploded[around].sum()), int(exploded[m["elsewhere"]].sum())
+    if pose_range is not None:
+        broken_by, broken_joints = broken_causes(pose_range, run.pred_local, run.pred_root,
+                                                 run.finite, run.fps)
+        broken = np.logical_or.reduce([broken_by[c] for c in BROKEN_CAUSES])
+        s.broken, s.broken_elsewhere = int(broken[around].sum()), int(broken[m["elsewhere"]].sum())
     incomplete = (run.flags & POSE_INCOMPLETE) != 0
     s.incomplete_in_gap = int(incomplete[m["gap"]].sum())
     if bone is not None:
@@ -383,6 +421,15 @@ def score_condition(clip: str, condition: str, run: Run, err: FrameErrors, windo
         s.explode_extra_causes = {c: int((causes[c] & extra).sum()) for c in EXPLODE_CAUSES}
         over = (err.angle > EXPLODE_ANGLE_DEG) & extra[:, None]
         s.explode_extra_joints = {int(j): int(over[:, j].sum()) for j in np.nonzero(over.any(0))[0]}
+        if pose_range is not None:
+            ref_by, _ = broken_causes(pose_range, ref_run.pred_local, ref_run.pred_root,
+                                      ref_run.finite, ref_run.fps)
+            new = broken & around & ~np.logical_or.reduce([ref_by[c] for c in BROKEN_CAUSES])
+            s.broken_extra = int(new.sum())
+            s.broken_extra_causes = {c: int((broken_by[c] & new).sum()) for c in BROKEN_CAUSES}
+            joints = broken_joints & new[:, None]
+            s.broken_extra_joints = {int(j): int(joints[:, j].sum())
+                                     for j in np.nonzero(joints.any(0))[0]}
         ref_incomplete = (ref_run.flags & POSE_INCOMPLETE) != 0
         s.incomplete_extra = int((incomplete & ~ref_incomplete & ~m["gap"]).sum())
         before = m["before"]
@@ -419,9 +466,10 @@ def gap_window(motion: sk.Motion, gap_s: float, lead_in: float = LEAD_IN_S) -> W
 
 
 def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Path, seed: int,
-                  world: str = "enu", mocapctl=None, sensors=DEFAULT_SENSORS) -> list:
+                  world: str = "enu", mocapctl=None, sensors=DEFAULT_SENSORS,
+                  pose_range=None) -> list:
     """Every condition ("none" first, then each segment silent) of one clip -> [ConditionScore].
-    sensors: the capture's (and the session's) sensor set."""
+    sensors: the capture's (and the session's) sensor set; pose_range: see score_condition."""
     from .ort import mocapctl_path
     from .synth_capture import Silence, load_truth, synth_capture
     mocapctl = mocapctl or mocapctl_path(require_onnx=True)
@@ -443,7 +491,8 @@ def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Pat
         err = frame_errors(run)
         bone = None if condition == NONE else bones[condition]
         scores.append(score_condition(motion.name, condition, run, err, windows,
-                                      ref=None if condition == NONE else ref, bone=bone))
+                                      ref=None if condition == NONE else ref, bone=bone,
+                                      pose_range=pose_range))
         if condition == NONE:
             ref = (run, err)
     return scores
@@ -492,6 +541,16 @@ def _sum_counts(counts) -> dict:
     return total
 
 
+def _sum_measured(values):
+    """The sum, or None when a value was not measured."""
+    values = list(values)
+    return None if any(v is None for v in values) else sum(values)
+
+
+def _count(v) -> str:
+    return "-" if v is None else str(v)
+
+
 def _top_joints(counts: dict, n: int = 3) -> str:
     top = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))[:n]
     return ", ".join(f"{sk.JOINT_NAMES[j]} {v}" for j, v in top) or "-"
@@ -521,6 +580,13 @@ def summarize(scores) -> dict:
                for c in EXPLODE_CAUSES},
             "explode_extra_clips": sum(1 for r in rows if r.explode_extra),
             "explode_extra_joints": _sum_counts(r.explode_extra_joints for r in rows),
+            "broken": _sum_measured(r.broken for r in rows),
+            "broken_elsewhere": _sum_measured(r.broken_elsewhere for r in rows),
+            "broken_extra": _sum_measured(r.broken_extra for r in rows),
+            **{f"broken_extra_{c}": sum(r.broken_extra_causes.get(c, 0) for r in rows)
+               for c in BROKEN_CAUSES},
+            "broken_extra_clips": sum(1 for r in rows if r.broken_extra),
+            "broken_extra_joints": _sum_counts(r.broken_extra_joints for r in rows),
             "drift_5s": float(np.mean([(r.metrics.get("root_drift_m") or {}).get("5s") or math.nan
                                        for r in rows])),
             "drift_10s": float(np.mean([(r.metrics.get("root_drift_m") or {}).get("10s") or math.nan
@@ -567,8 +633,22 @@ def findings(summary) -> list:
                f"while the truth moved for up to {_fmt(summary[bone_c]['freeze_bone'], 1)} s "
                f"({bone_c}), and for at most "
                f"{_fmt(max(summary[c]['freeze_bone_ref'] for c in conds), 1)} s with every sensor.")
+    if all(summary[c]["broken_extra"] is not None for c in conds):
+        broken = {cause: sum(summary[c][f"broken_extra_{cause}"] for c in conds) for cause in BROKEN_CAUSES}
+        total = sum(summary[c]["broken_extra"] for c in conds)
+        out.append(f"- **Explode** (a pose no person takes, judged on the pose alone): "
+                   + ("no silent sensor broke a pose that was whole with every sensor" if total == 0
+                      else f"{total} new broken frames: " + ", ".join(
+                          f"{c} {summary[c]['broken_extra']} "
+                          f"({_top_joints(summary[c]['broken_extra_joints'], 2)})"
+                          for c in conds if summary[c]["broken_extra"]))
+                   + f" ({broken['range']} with a joint out of its range, {broken['speed']} turning "
+                   f"too fast, {broken['root']} root steps over {EXPLODE_ROOT_STEP_M:g} m, "
+                   f"{broken['nan']} NaN); with every sensor {ref['broken']} frames of the same "
+                   f"windows are broken.")
     new = {cause: sum(summary[c][f"explode_extra_{cause}"] for c in conds) for cause in EXPLODE_CAUSES}
-    out.append(f"- **Explode**: {new['nan']} NaN poses and {new['root']} new root steps over "
+    out.append(f"- **Far off** (the truth's pose needed to tell): {new['nan']} NaN poses and "
+               f"{new['root']} new root steps over "
                f"{EXPLODE_ROOT_STEP_M:g} m; new frames with an error over {EXPLODE_ANGLE_DEG:g} deg: "
                + ", ".join(f"{c} {summary[c]['explode_extra']} "
                            f"({_top_joints(summary[c]['explode_extra_joints'], 2)})" for c in conds)
@@ -585,6 +665,19 @@ def findings(summary) -> list:
                f"{_fmt(max(summary[c]['angle_after'] for c in conds))} deg against "
                f"{_fmt(ref['angle_after'])} with every sensor.")
     return out
+
+
+def cause_rows(summary, kind: str, causes) -> list:
+    """One table row per condition: its frames of `kind` ("broken" or "explode"), the new ones,
+    those by cause, the joints most often involved, and those elsewhere."""
+    rows = []
+    for cond, v in summary.items():
+        new = "-" if cond == NONE else v[f"{kind}_extra"]
+        why = ["-"] * len(causes) if cond == NONE else [str(v[f"{kind}_extra_{c}"]) for c in causes]
+        joints = "-" if cond == NONE else _top_joints(v[f"{kind}_extra_joints"])
+        rows.append(f"| {cond} | {v[kind]} | {new} | " + " | ".join(why) +
+                    f" | {joints} | {v[f'{kind}_elsewhere']} |")
+    return rows
 
 
 def write_report(path: Path, scores, meta: dict) -> Path:
@@ -604,14 +697,17 @@ def write_report(path: Path, scores, meta: dict) -> Path:
              f"of `training/dropout_eval.py` defines each column.", "",
              "| missing | angle gap | angle after | angle elsewhere | pos gap | pos after | pos elsewhere "
              "| its bone in the gap, deg (all sensors) | longest freeze s: body / its bone (all sensors) "
-             "| exploding frames, new (clips) | recovery s: median / worst (never) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| broken frames, new (clips) | frames > 90 deg off, new (clips) "
+             "| recovery s: median / worst (never) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for cond, v in summary.items():
         if cond == NONE:
-            bone = rec = new = "-"
+            bone = rec = new = broken = "-"
             freeze = f"{_fmt(v['freeze_body'], 1)} / -"
         else:
             new = f"{v['explode_extra']} ({v['explode_extra_clips']})"
+            broken = ("-" if v["broken_extra"] is None
+                      else f"{v['broken_extra']} ({v['broken_extra_clips']})")
             bone = f"{_fmt(v['bone'], 1)} ({_fmt(v['bone_ref'], 1)})"
             freeze = (f"{_fmt(v['freeze_body'], 1)} / {_fmt(v['freeze_bone'], 1)} "
                       f"({_fmt(v['freeze_bone_ref'], 1)})")
@@ -619,19 +715,25 @@ def write_report(path: Path, scores, meta: dict) -> Path:
                    f"({v['never_recovered']})")
         lines.append(f"| {cond} | {_fmt(v['angle_gap'])} | {_fmt(v['angle_after'])} | "
                      f"{_fmt(v['angle_elsewhere'])} | {_fmt(v['pos_gap'])} | {_fmt(v['pos_after'])} | "
-                     f"{_fmt(v['pos_elsewhere'])} | {bone} | {freeze} | {new} | {rec} |")
-    lines += ["", f"Exploding frames in the gap and the {RECOVERY_WINDOW_S:g} s after it (all clips): "
-              f"every one, those that do not explode in the run with every sensor (*new*), and the "
-              f"causes of the new ones (a frame can have several); *elsewhere*: the other frames.", "",
-              "| missing | exploding | new | pelvis global > 90 deg | another joint > 90 deg "
+                     f"{_fmt(v['pos_elsewhere'])} | {bone} | {freeze} | {broken} | {new} | {rec} |")
+    if all(v["broken"] is not None for v in summary.values()):
+        lines += ["", f"Broken poses in the gap and the {RECOVERY_WINDOW_S:g} s after it (all clips), "
+                  f"judged on the pose alone against the training people's range of motion: every "
+                  f"one, those that are whole in the run with every sensor (*new*), and the causes "
+                  f"of the new ones (a frame can have several); *elsewhere*: the other frames.", "",
+                  "| missing | broken | new | a joint out of range | a joint too fast "
+                  "| root step > 0.5 m | NaN | joints most often broken in new frames | elsewhere |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        lines += cause_rows(summary, "broken", BROKEN_CAUSES)
+    lines += ["", f"Frames far off the truth in the gap and the {RECOVERY_WINDOW_S:g} s after it "
+              f"(all clips): every one, those that are not far off in the run with every sensor "
+              f"(*new*), and the causes of the new ones (a frame can have several); *elsewhere*: "
+              f"the other frames. An arm posed hanging while the person's was raised is far off "
+              f"and not broken: without its sensor the model cannot know.", "",
+              "| missing | far off | new | pelvis global > 90 deg | another joint > 90 deg "
               "| root step > 0.5 m | NaN | joints most often over 90 deg in new frames | elsewhere |",
               "|---|---|---|---|---|---|---|---|---|"]
-    for cond, v in summary.items():
-        new = "-" if cond == NONE else v["explode_extra"]
-        why = (["-"] * 4 if cond == NONE else [str(v[f"explode_extra_{c}"]) for c in EXPLODE_CAUSES])
-        joints = "-" if cond == NONE else _top_joints(v["explode_extra_joints"])
-        lines.append(f"| {cond} | {v['explode']} | {new} | " + " | ".join(why) +
-                     f" | {joints} | {v['explode_elsewhere']} |")
+    lines += cause_rows(summary, "explode", EXPLODE_CAUSES)
     lines += ["", "Checks that the silence is where it was put and changes nothing else: poses "
               "flagged incomplete (a model sensor held or silent) in the gap, and outside it beyond "
               "the run with every sensor; the largest joint angle difference to that run before the "
@@ -675,10 +777,16 @@ def write_report(path: Path, scores, meta: dict) -> Path:
               f"moves at less than {FREEZE_RATIO:g} x the truth's speed while the truth moves (body: "
               f"mean root-aligned joint speed >= {BODY_MOVING_M_S:g} m/s; bone: angular speed >= "
               f"{BONE_MOVING_DEG_S:g} deg/s); speeds averaged over {SMOOTH_S:g} s. Worst clip.",
-              f"- exploding frames: a NaN, a joint angle error > {EXPLODE_ANGLE_DEG:g} deg (joint 0: "
-              f"the pelvis's global rotation) or a root step > {EXPLODE_ROOT_STEP_M:g} m in one frame, "
-              f"in the gap and the window after it, summed over clips; new: not exploding in the "
-              f"run with every sensor (clips: how many clips have any).",
+              f"- broken frames: a joint's local rotation more than {OUT_OF_RANGE_DEG:g} deg from "
+              f"every rotation that joint takes in the training people's motion capture, a joint "
+              f"turning faster than {SPEED_MARGIN:g} x the {TOO_FAST_QUANTILE:g} quantile of its "
+              f"speed there, a NaN, or a root step > {EXPLODE_ROOT_STEP_M:g} m in one frame, in the "
+              f"gap and the window after it, summed over clips; new: not broken in the run with "
+              f"every sensor (clips: how many clips have any).",
+              f"- frames > 90 deg off (far off): a NaN, a joint angle error > {EXPLODE_ANGLE_DEG:g} "
+              f"deg (joint 0: the pelvis's global rotation) or a root step > "
+              f"{EXPLODE_ROOT_STEP_M:g} m in one frame, the same windows; new: not far off in the "
+              f"run with every sensor.",
               f"- recovery: from the gap's end until the angle and position errors (averaged over "
               f"{SMOOTH_S:g} s, frames after the gap only) are within {RECOVERED_WITHIN:.0%} (+ "
               f"{RECOVERY_SLACK_DEG:g} deg, {RECOVERY_SLACK_CM:g} cm) of the run with every sensor "
@@ -694,8 +802,10 @@ def write_report(path: Path, scores, meta: dict) -> Path:
 
 # ------------------------------------------------------------------------------ command
 def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, model=DEFAULT_MODEL,
-                   seed: int = 0, workdir=None, progress=print, sensors=DEFAULT_SENSORS) -> list:
-    """Every clip's conditions -> [ConditionScore] (clip order, "none" first in each clip)."""
+                   seed: int = 0, workdir=None, progress=print, sensors=DEFAULT_SENSORS,
+                   pose_range=None) -> list:
+    """Every clip's conditions -> [ConditionScore] (clip order, "none" first in each clip);
+    pose_range: see score_condition."""
     from .ort import mocapctl_path
     mocapctl = mocapctl_path(require_onnx=True)
     scores = []
@@ -707,7 +817,7 @@ def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, mode
             t0 = time.monotonic()
             clip_scores = evaluate_clip(motion, segments, gap_s, model, d, seed + i,
                                         world="enu" if i % 2 == 0 else "nwu", mocapctl=mocapctl,
-                                        sensors=sensors)
+                                        sensors=sensors, pose_range=pose_range)
             scores += clip_scores
             if progress:
                 worst = max((s.recovery for s in clip_scores[1:]), default=math.nan)
@@ -773,6 +883,27 @@ def load_clips(args, min_s: float) -> tuple:
                                 args.clips, args.clip_seconds, min_s)
 
 
+def pose_range_of(option: str) -> tuple:
+    """--pose-range: (the range or None, a note for the report). "train": the CMU training
+    people's (built once, cached), or none when the data is not here (the procedural motions need
+    none); "none": not counted; else a file that pose-range --out saved."""
+    from .pose_range import PoseRange, training_pose_range
+    if option == "none":
+        return None, "Broken poses were not counted (--pose-range none)."
+    if option == "train":
+        try:
+            r = training_pose_range()
+        except FileNotFoundError as e:
+            return None, (f"Broken poses were not counted: the range of motion is measured on the "
+                          f"CMU training people, and they are not here ({e}).")
+    else:
+        try:
+            r = PoseRange.load(Path(option))
+        except (OSError, KeyError, ValueError) as e:
+            raise UsageError(f"--pose-range {option}: not a range that pose-range --out saved ({e})") from e
+    return r, f"Range of motion (`python3 -m training pose-range`): {r.source}."
+
+
 def report_path(args, name: str) -> Path:
     """--out, else training/results/NAME (training/results/test/NAME for the test split)."""
     if args.out:
@@ -807,6 +938,10 @@ def add_arguments(p=None):
     p.add_argument("--out", default=None, help="the report (default training/results/missing_sensor.md, "
                    "training/results/test/missing_sensor.md for --split test)")
     p.add_argument("--keep", default=None, help="keep the captures, poses and truths in this folder")
+    p.add_argument("--pose-range", default="train",
+                   help="what a broken pose is judged against: train (the CMU training people's "
+                        "range of motion, measured once and cached; default), none (not counted), "
+                        "or a file that `python3 -m training pose-range --out` saved")
     return p
 
 
@@ -835,10 +970,11 @@ def main(args=None) -> int:
     print(f"missing-sensor: {len(motions)} clips ({source}) x {1 + len(segments)} conditions, "
           f"{args.seconds:g} s gaps, model {_shown(model)} (contract {contract})")
     started = time.monotonic()
+    pose_range, range_note = pose_range_of(args.pose_range)
+    notes = [range_note]
     scores = run_evaluation(motions, segments, args.seconds, model, args.seed, args.keep,
-                            sensors=sensors)
+                            sensors=sensors, pose_range=pose_range)
     command = "python3 -m training missing-sensor " + " ".join(shlex.quote(a) for a in _argv_of(args))
-    notes = []
     left_out = [s for s in model_sensors if s not in sensors]
     if left_out:
         notes.append(f"The capture has {len(sensors)} sensors ({', '.join(sensors)}); the model's "
@@ -863,8 +999,10 @@ def main(args=None) -> int:
     for cond, v in summarize(scores).items():
         print(f"{cond:12s} angle gap/after/elsewhere {_fmt(v['angle_gap'])} / {_fmt(v['angle_after'])} / "
               f"{_fmt(v['angle_elsewhere'])} deg  pos {_fmt(v['pos_gap'])} / {_fmt(v['pos_after'])} / "
-              f"{_fmt(v['pos_elsewhere'])} cm  freeze {_fmt(v['freeze_body'], 1)} s  exploding "
-              f"{v['explode']} (new {v['explode_extra'] if cond != NONE else '-'})  recovery median {_fmt(v['recovery_median'])} s worst "
+              f"{_fmt(v['pos_elsewhere'])} cm  freeze {_fmt(v['freeze_body'], 1)} s  broken "
+              f"{_count(v['broken'])} (new {_count(v['broken_extra']) if cond != NONE else '-'})  "
+              f"far off {v['explode']} (new {v['explode_extra'] if cond != NONE else '-'})  "
+              f"recovery median {_fmt(v['recovery_median'])} s worst "
               f"{_fmt(v['recovery_max'])} s")
     print(f"missing-sensor: wrote {_shown(path)}")
     return 0
@@ -882,6 +1020,8 @@ def _argv_of(args) -> list:
         out += ["--segments", args.segments]
     if args.out:
         out += ["--out", _shown(args.out)]
+    if args.pose_range != "train":
+        out += ["--pose-range", args.pose_range if args.pose_range == "none" else _shown(args.pose_range)]
     return out
 
 

@@ -141,6 +141,50 @@ def test_the_scores_catch_a_frozen_an_exploding_and_a_never_recovering_pose():
     assert _score(motion, _run(motion, early), ref, windows).same_before_gap == pytest.approx(2.0, abs=1e-3)
 
 
+def test_a_pose_no_person_takes_is_broken_and_a_wrong_one_is_not():
+    from training import pose_range
+    motion = procedural.make_motion("arm_swing", 14.0, seed=3, name="swing")
+    others = [procedural.make_motion(k, 14.0, seed=9) for k in ("walk", "squat")]
+    limits = pose_range.build_pose_range([motion, *others], frame_step=1)
+    windows = de.Windows(5.0, 8.0)
+    t = np.arange(motion.num_frames) / motion.fps
+    gap = (t >= 5.0) & (t < 8.0)
+    ref = _run(motion)
+
+    def score(run, reference=ref):
+        return de.score_condition(motion.name, "left_wrist", run, de.frame_errors(run), windows,
+                                  ref=(reference, de.frame_errors(reference)), bone=20,
+                                  pose_range=limits)
+
+    fine = score(_run(motion))
+    assert fine.broken == fine.broken_extra == 0
+    # Another motion's poses in the gap (a squat in the swing): far from the truth and in range;
+    # only the cuts into and out of it snap too fast.
+    other = motion.local_rot.astype(np.float64).copy()
+    squat = others[1].local_rot.astype(np.float64)
+    other[gap] = squat[np.nonzero(gap)[0]]
+    s = score(_run(motion, other))
+    assert s.angle["gap"] / s.frames["gap"] > 2.0
+    assert s.broken_extra_causes == {"range": 0, "speed": 2, "root": 0, "nan": 0}
+    # An elbow bent backwards through the gap: broken, out of range every frame, too fast where it
+    # flips in and out, and the joint is named.
+    bent = motion.local_rot.astype(np.float64).copy()
+    bent[gap, 18] = bent[gap, 18] @ sk.rot_axis("y", np.radians(-120.0))[None]
+    s = score(_run(motion, bent))
+    assert s.broken == s.broken_extra == int(gap.sum()) + 1
+    assert s.broken_extra_causes == {"range": int(gap.sum()), "speed": 2, "root": 0, "nan": 0}
+    assert s.broken_extra_joints == {18: int(gap.sum()) + 1}
+    assert s.broken_elsewhere == 0
+    # Broken in the run with every sensor too: not new.
+    s = score(_run(motion, bent), _run(motion, bent))
+    assert s.broken == int(gap.sum()) + 1 and s.broken_extra == 0
+    # Without a range of motion nothing is counted, and the summary says "not measured".
+    plain = de.score_condition(motion.name, "left_wrist", _run(motion, bent),
+                               de.frame_errors(_run(motion, bent)), windows,
+                               ref=(ref, de.frame_errors(ref)), bone=20)
+    assert plain.broken is None and de.summarize([plain])["left_wrist"]["broken"] is None
+
+
 def test_flags_outside_the_gap_are_counted_beyond_the_reference_run():
     motion = procedural.make_motion("arm_swing", 12.0, seed=2)
     windows = de.Windows(4.0, 7.0)
@@ -209,17 +253,30 @@ def test_a_short_run_through_mocapctl_has_the_gap_where_it_was_put(tmp_path):
     poses before the gap those of the run without it, and this module's angle error equal to
     mocapctl's own."""
     out, keep = tmp_path / "report.md", tmp_path / "keep"
+    # A range of motion the test makes: the procedural motions', with the right elbow allowed
+    # only straight, which the model's bent elbow leaves on every frame of both runs.
+    from training import pose_range
+    limits = pose_range.build_pose_range(de.procedural_clips(5, 10.0, 7), source="test motions")
+    limits.covers[19] = np.array([[1.0, 0.0, 0.0, 0.0]])   # the right elbow: only straight
+    saved = limits.save(tmp_path / "range.npz")
     assert de.main(["--procedural", "--clips", "1", "--clip-seconds", "10", "--seconds", "2",
-                    "--segments", "right_wrist", "--out", str(out), "--keep", str(keep)]) == 0
+                    "--segments", "right_wrist", "--out", str(out), "--keep", str(keep),
+                    "--pose-range", str(saved)]) == 0
     text = out.read_text()
     assert "python3 -m training missing-sensor --procedural --clips 1 --clip-seconds 10 --seconds 2" in text
+    assert "Range of motion (`python3 -m training pose-range`): test motions." in text
     # the default model (contract 3, no masked features) gets stand-ins for a silent sensor
     assert "(contract 3) reads no mask" in text and "as the model posed it" in text
     assert "turned about the vertical by the shins' mean heading change" in text
     assert re.search(r"^\| none \| [\d.]+ \|", text, re.M), text
     row = re.search(r"^\| right_wrist \| ([\d.]+) \| .*\| (\d+) \((\d+)\) \| ([\d.]+|never) / ", text, re.M)
     assert row, text
-    assert int(row.group(2)) == 0 and row.group(4) != "never"   # nothing exploded; it recovered
+    assert int(row.group(2)) == 0 and row.group(4) != "never"   # nothing far off; it recovered
+    # the bent right elbow breaks every frame of both runs, so none is new; the counts are there
+    broken = re.search(r"^\| right_wrist \| (\d+) \| (\d+) \| (\d+) \| (\d+) \| 0 \| 0 \| .* \| (\d+) \|$",
+                       text, re.M)
+    assert broken, text
+    assert int(broken.group(1)) == 120 + 120 and int(broken.group(2)) == 0, broken.group(0)
     assert re.search(r"^\| right_wrist \| 120 of 120 \| 0 \| 0\.000 \|", text, re.M), text
 
     clip_dir = next(keep.iterdir())

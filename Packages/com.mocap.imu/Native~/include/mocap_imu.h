@@ -553,7 +553,10 @@ MOCAP_API mocap_status mocap_solver_config_defaults(mocap_solver_config *config)
  * wrist its last sample turned about the vertical as far as the pelvis turned since; a wrist or
  * the head then moves over 4 s towards the bone's usual orientation relative to the pelvis'
  * heading; the pelvis (every model reads the body in its frame) its last sample turned about
- * the vertical as far as the shins turned since, at rest. */
+ * the vertical as far as the shins turned since, at rest. A held pelvis or wrist sample (the
+ * moments before a sensor counts as silent) is turned the same way. A sensor that comes back
+ * is fed its readings turned by the stand-in's offset at its return, the offset fading out
+ * over 0.15 s, so the bone does not snap round in one frame. */
 MOCAP_API mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *config,
                                          mocap_solver **out);
 /* Before mocap_solver_start. The solver becomes the consumer of the session's frames (do not

@@ -1711,6 +1711,50 @@ void pose_global(const mocap_pose &p, int j, double out[9])
     mat3_multiply(out, parent, local);
 }
 
+// A sensor back from a silence is fed its reading turned by the offset its stand-in had at the
+// return, the offset fading out over solver.c's RETURN_EASE_S (0.15 s: 9 frames at 60 Hz).
+struct EaseBack {
+    static constexpr int kFrames = 9;
+    bool stood_in = false, easing = false;
+    int frames = 0;
+    double stand_in[9] = {}, offset[4] = {1, 0, 0, 0};
+    double largest_offset_deg = 0.0;
+
+    void silent(const float *fed)
+    {
+        for (int i = 0; i < 9; ++i) stand_in[i] = fed[i];
+        stood_in = true;
+        easing = false;
+    }
+    // What a live frame whose own reading is `target` should be fed.
+    void live(const double target[9], double want[9])
+    {
+        double qt[4];
+        mat3_to_quat(qt, target);
+        if (stood_in) {
+            double qs[4], inverse[4];
+            mat3_to_quat(qs, stand_in);
+            quat_conjugate(inverse, qt);
+            quat_multiply(offset, qs, inverse);
+            largest_offset_deg = std::max(largest_offset_deg,
+                                          2.0 * std::acos(std::min(1.0, std::fabs(offset[0]))) * 180.0 / 3.14159265358979);
+            stood_in = false;
+            easing = true;
+            frames = 0;
+        }
+        if (easing && ++frames >= kFrames) easing = false;
+        if (!easing) {
+            std::copy(target, target + 9, want);
+            return;
+        }
+        static const double identity[4] = {1, 0, 0, 0};
+        double part[4], q[4];
+        quat_slerp(part, identity, offset, 1.0 - (double)frames / kFrames);
+        quat_multiply(q, part, qt);
+        quat_to_mat3(want, q);
+    }
+};
+
 }  // namespace
 
 namespace {
@@ -1718,7 +1762,9 @@ namespace {
 // Every model is fed a stand-in for a silent sensor: a silent shin or head its bone as the model
 // posed it in the frame before, at rest (zero acceleration); a silent wrist its held sample
 // turned about the vertical as far as the pelvis turned since; a silent wrist or head then moves
-// towards its bone's usual orientation over 4 s of silence; everything live is fed as measured.
+// towards its bone's usual orientation over 4 s of silence; a held wrist sample is turned with
+// the pelvis too; a sensor back from a silence eases from its stand-in to its readings
+// (EaseBack); everything else live is fed as measured.
 // A masked model (the shipped seven-sensor one, here on the six) gets them marked present; only
 // its chest, which the session lacks, is missing.
 void expect_silent_sensors_stood_in(mocap_model *model, bool masked)
@@ -1740,6 +1786,8 @@ void expect_silent_sensors_stood_in(mocap_model *model, bool masked)
     auto heading = [](const float *m) { return std::atan2(m[2] - m[5] * m[1], m[8] - m[5] * m[7]); };
     double pelvis_when_wrist_live = 0.0, wrist_turn = 0.0, max_share = 0.0;
     int silent_frames = 0, live_frames = 0, wrist_silent_frames = 0, head_silent_frames = 0;
+    int eased_frames = 0;
+    EaseBack ease[6];
     // solver.c's USUAL_RIGHT_WRIST and USUAL_HEAD (python3 -m training usual-orientation)
     static const double kRightWristUsual[9] = {-0.0721, -0.7129, 0.6976, 0.2907, 0.6540,
                                                0.6984,  -0.9541, 0.2531, 0.1600};
@@ -1759,10 +1807,22 @@ void expect_silent_sensors_stood_in(mocap_model *model, bool masked)
             if (!silent) {
                 ++live_frames;
                 if (k == wrist) wrist_silent_frames = 0;
-                for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], f.measured[k][i], 1e-6) << k;
                 if (k == wrist && f.state[k] == MOCAP_SENSOR_FRESH) pelvis_when_wrist_live = heading(f.orientation[0]);
+                double target[9], want[9];
+                for (int i = 0; i < 9; ++i) target[i] = f.measured[k][i];
+                if (k == wrist && f.state[k] == MOCAP_SENSOR_HOLDING) {  // turned with the pelvis
+                    double ry[9], measured[9];
+                    std::copy(target, target + 9, measured);
+                    mat3_rotation_y(ry, heading(f.orientation[0]) - pelvis_when_wrist_live);
+                    mat3_multiply(target, ry, measured);
+                }
+                const bool was_easing = ease[k].easing || ease[k].stood_in;
+                ease[k].live(target, want);
+                eased_frames += was_easing && ease[k].easing;
+                for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[k][i], want[i], 2e-4) << k << " frame " << kv.first;
                 continue;
             }
+            ease[k].silent(f.orientation[k]);
             ASSERT_TRUE(k == shin || k == head || k == wrist) << "sensor " << k << " went silent";
             if (k == wrist) {
                 // its held sample turned with the pelvis, on its way to the hand's usual
@@ -1807,6 +1867,9 @@ void expect_silent_sensors_stood_in(mocap_model *model, bool masked)
     EXPECT_GT(wrist_turn, 10.0 * 3.14159265358979 / 180.0) << "the body turned while the wrist was silent";
     EXPECT_GT(max_share, 0.15) << "the wrist was silent long enough to move towards its usual orientation";
     EXPECT_GT(live_frames, 6 * 100);
+    // three sensors came back, the wrist twice, each easing in over 8 frames
+    EXPECT_EQ(eased_frames, 4 * (EaseBack::kFrames - 1));
+    EXPECT_GT(ease[wrist].largest_offset_deg, 10.0) << "the settled wrist came back off its reading";
     // the wrist's held acceleration is its last sample, not zero
     bool wrist_accelerates = false;
     for (const auto &kv : tap.fed)
@@ -1860,15 +1923,26 @@ TEST_F(SolverOnShippedModel, ASilentPelvisTurnsWithTheShins)
     double ref[2][2] = {{0, 1}, {0, 1}};
     int silent = 0;
     double largest_turn = 0.0, off_truth = 0.0, off_held = 0.0;
+    EaseBack ease;
+    int held = 0;
     for (const auto &kv : tap.fed) {
         const SilenceTap::Fed &f = kv.second;
-        if (f.state[pelvis] != MOCAP_SENSOR_SILENT) {
-            for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[pelvis][i], f.measured[pelvis][i], 1e-6);
-            if (f.state[pelvis] == MOCAP_SENSOR_FRESH)
-                for (int s = 0; s < 2; ++s) hvec(f.orientation[shins[s]], ref[s]);
+        if (f.state[pelvis] == MOCAP_SENSOR_FRESH) {
+            double target[9], want[9];
+            for (int i = 0; i < 9; ++i) target[i] = f.measured[pelvis][i];
+            ease.live(target, want);
+            for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[pelvis][i], want[i], 2e-4) << kv.first;
+            for (int s = 0; s < 2; ++s) hvec(f.orientation[shins[s]], ref[s]);
             continue;
         }
-        ++silent;
+        // held (the first moments of the silence) or silent: turned with the shins
+        ease.silent(f.orientation[pelvis]);
+        if (f.state[pelvis] == MOCAP_SENSOR_HOLDING) {
+            ++held;
+        } else {
+            ++silent;
+            for (int i = 0; i < 3; ++i) ASSERT_EQ(f.acceleration[pelvis][i], 0.0f);
+        }
         double sx = 0, cx = 0;
         for (int s = 0; s < 2; ++s) {
             double b[2];
@@ -1883,7 +1957,6 @@ TEST_F(SolverOnShippedModel, ASilentPelvisTurnsWithTheShins)
         for (int i = 0; i < 9; ++i) held[i] = f.measured[pelvis][i];
         mat3_multiply(want, ry, held);
         for (int i = 0; i < 9; ++i) ASSERT_NEAR(f.orientation[pelvis][i], want[i], 2e-4) << kv.first;
-        for (int i = 0; i < 3; ++i) ASSERT_EQ(f.acceleration[pelvis][i], 0.0f);
         auto real = truth.fed.find(kv.first);
         ASSERT_NE(real, truth.fed.end());
         const double truth_heading = heading(real->second.measured[pelvis]);
@@ -1891,11 +1964,12 @@ TEST_F(SolverOnShippedModel, ASilentPelvisTurnsWithTheShins)
         off_held += std::fabs(std::remainder(heading(f.measured[pelvis]) - truth_heading, 2 * 3.14159265358979));
     }
     EXPECT_GT(silent, 90);                   // most of 2 s at 60 Hz
+    EXPECT_GT(held, 5);                      // the samples held before the silence is declared
     EXPECT_GT(largest_turn, 20.0 * 3.14159265358979 / 180.0) << "the performer turned while the pelvis was silent";
     const double deg = 180.0 / 3.14159265358979;
     std::printf("pelvis heading in the gap, mean error: turned %.1f deg, held %.1f deg\n",
-                off_truth / silent * deg, off_held / silent * deg);
-    EXPECT_LT(off_truth / silent * deg, 5.0);  // the real pelvis' heading, where holding was ~100 off
-    EXPECT_GT(off_held / silent * deg, 30.0);
+                off_truth / (held + silent) * deg, off_held / (held + silent) * deg);
+    EXPECT_LT(off_truth / (held + silent) * deg, 5.0);  // the real pelvis' heading, where holding was ~100 off
+    EXPECT_GT(off_held / (held + silent) * deg, 30.0);
 }
 

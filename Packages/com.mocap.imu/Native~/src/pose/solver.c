@@ -75,6 +75,13 @@ typedef struct character {
     uint32_t have_pelvis_heading_at;
     /* Model frames each sensor has been silent for (settle_silent_sensors). */
     int32_t silent_frames[MOCAP_MAX_SENSORS];
+    /* Ease back from a stand-in (ease_returning_sensors): bit k of stood_in, sensor k was fed one
+     * in the last frame (stand_in_rot); of returning, it is live again and its stand-in's offset
+     * (return_offset, stand-in times live^-1) is fading out, returned_frames frames in. */
+    uint32_t stood_in, returning;
+    float stand_in_rot[MOCAP_MAX_SENSORS][9];
+    double return_offset[MOCAP_MAX_SENSORS][4];
+    int32_t returned_frames[MOCAP_MAX_SENSORS];
 
     mocap_atomic_int ended;     /* the session ended and every pose was pushed */
     mocap_atomic_int reset_requested;
@@ -519,8 +526,8 @@ static void turn_silent_pelvis(const mocap_solver *s, character *ch, const mocap
             ch->have_headings |= 1u << k;
         }
     }
-    if (pf->state != MOCAP_SENSOR_SILENT) return;
-    memset(acceleration + pelvis * 3, 0, 3 * sizeof(float));
+    if (pf->state != MOCAP_SENSOR_SILENT && pf->state != MOCAP_SENSOR_HOLDING) return;
+    if (pf->state == MOCAP_SENSOR_SILENT) memset(acceleration + pelvis * 3, 0, 3 * sizeof(float));
     /* the shins' turns summed as vectors: a shin whose heading is ill-defined (pitched near the
      * vertical, its horizontal vector short) counts for little */
     double sx = 0.0, cx = 0.0;
@@ -564,7 +571,9 @@ static void turn_silent_wrists(const mocap_solver *s, character *ch, const mocap
             ch->pelvis_heading_at[k] = pelvis_now;
             ch->have_pelvis_heading_at |= 1u << k;
         }
-        if (!silent_sensor_fed(sf, mask, k) || !(ch->have_pelvis_heading_at & (1u << k))) continue;
+        if ((sf->state != MOCAP_SENSOR_HOLDING && !silent_sensor_fed(sf, mask, k)) ||
+            !(ch->have_pelvis_heading_at & (1u << k)))
+            continue;
         turn_about_vertical(orientation + k * 9, (double)pelvis_now - (double)ch->pelvis_heading_at[k]);
     }
 }
@@ -626,6 +635,64 @@ static void settle_silent_sensors(const mocap_solver *s, character *ch, const mo
     }
 }
 
+/* Seconds over which a sensor that comes back eases from its stand-in to its own readings. */
+#define RETURN_EASE_S 0.15
+
+/* A stand-in is a guess, and when the sensor comes back the guess can be tens of degrees off
+ * (a settled wrist, a head the model guessed): fed the reading at once, the model snaps the bone
+ * round in one frame, faster than a person turns it. So the sensor is fed its own reading
+ * turned by the stand-in's offset at the return, the offset fading to nothing over
+ * RETURN_EASE_S: the bone follows the sensor's motion from the first frame and reaches it
+ * after the ease. */
+static void ease_returning_sensors(const mocap_solver *s, character *ch, const mocap_frame *f,
+                                   float *orientation, const float *mask)
+{
+    const int32_t ease_frames = (int32_t)(RETURN_EASE_S / s->drift.dt + 0.5);
+    for (int k = 0; k < s->sensors; ++k) {
+        const uint32_t bit = 1u << k;
+        const mocap_sensor_frame *sf = model_sensor(ch, f, k);
+        float *m = orientation + k * 9;
+        if (silent_sensor_fed(sf, mask, k)) {
+            memcpy(ch->stand_in_rot[k], m, sizeof ch->stand_in_rot[k]);
+            ch->stood_in |= bit;
+            ch->returning &= ~bit;
+            continue;
+        }
+        if (!sensor_live(sf)) {
+            ch->stood_in &= ~bit;
+            ch->returning &= ~bit;
+            continue;
+        }
+        double live[4];
+        if (skeleton_matrix_to_quat(m, live) != 0) {
+            ch->stood_in &= ~bit;
+            ch->returning &= ~bit;
+            continue;
+        }
+        if (ch->stood_in & bit) {
+            double stand_in[4], live_inverse[4];
+            ch->stood_in &= ~bit;
+            if (skeleton_matrix_to_quat(ch->stand_in_rot[k], stand_in) != 0) continue;
+            quat_conjugate(live_inverse, live);
+            quat_multiply(ch->return_offset[k], stand_in, live_inverse);
+            ch->returned_frames[k] = 0;
+            ch->returning |= bit;
+        }
+        if (!(ch->returning & bit)) continue;
+        if (++ch->returned_frames[k] >= ease_frames) {
+            ch->returning &= ~bit;
+            continue;
+        }
+        static const double identity[4] = {1.0, 0.0, 0.0, 0.0};
+        double offset[4], q[4], r[9];
+        quat_slerp(offset, identity, ch->return_offset[k],
+                   1.0 - (double)ch->returned_frames[k] / (double)ease_frames);
+        quat_multiply(q, offset, live);
+        quat_to_mat3(r, q);
+        for (int i = 0; i < 9; ++i) m[i] = (float)r[i];
+    }
+}
+
 static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns,
                        const float *rot, const float *vel, const float *contact)
 {
@@ -660,6 +727,7 @@ static void reset_character_state(mocap_solver *s, int32_t c)
     ch->have_headings = 0;
     ch->have_pelvis_heading_at = 0;
     memset(ch->silent_frames, 0, sizeof ch->silent_frames);
+    ch->stood_in = ch->returning = 0;
 }
 
 /* Keeps a failed inference's status and text (mocap_last_error on this thread) for the stats:
@@ -708,6 +776,7 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
         turn_silent_pelvis(s, ch, frames[i], s->in_ori[nb], s->in_acc[nb]);
         turn_silent_wrists(s, ch, frames[i], s->in_ori[nb], mask);
         settle_silent_sensors(s, ch, frames[i], s->in_ori[nb], mask);
+        ease_returning_sensors(s, ch, frames[i], s->in_ori[nb], mask);
         s->tick_taken[i] = taken;
         s->batch_index[nb++] = i;
     }
