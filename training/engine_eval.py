@@ -33,7 +33,10 @@ whether the correction helped at 10 s. Foot contacts: precision and recall of th
 planted flags against the truth's (a foot slower than synthesis.CONTACT_SPEED). Foot slide: the
 mean horizontal speed (cm/s) of the engine's feet (forward kinematics of its poses on the
 model's own skeleton, its rest_offsets, from its root) in the frames where it says they are planted (now and in the
-frame before), beside the motion capture's own under its planted labels.
+frame before), beside the motion capture's own under its planted labels. Broken poses: the share
+of poses no person takes, judged on the pose alone (pose_range.py, --pose-range: a joint out of
+the training people's range of rotation or turning faster than theirs, or a NaN), and the
+joints most often involved.
 Writes OUT (default training/results/engine.md; training/results/test/engine.md for --split
 test): the tables, the per-clip figures and the command that made it.
 """
@@ -146,6 +149,7 @@ class ClipResult:
     truth_contact: np.ndarray | None = None    # (N,2) bool
     truth_slide: np.ndarray | None = None      # foot_slide of the motion capture, m/s
     slide: dict = field(default_factory=dict)  # setting -> foot_slide of its replay, m/s
+    broken: dict = field(default_factory=dict) # setting -> (P,24) joints broken in each pose
     fps: float = 60.0
     # metres of the performer per metre of the engine's root: with --height the engine moves the
     # root in its skeleton's size, the performer's height / the model's training height
@@ -220,8 +224,22 @@ def scaled_motion(motion: sk.Motion, scale: float) -> sk.Motion:
                      (motion.root_pos * scale).astype(np.float32), (motion.offsets * scale).astype(np.float32))
 
 
+def broken_joints(pose_range, quats, fps: float) -> np.ndarray:
+    """(P,24) the joints of each pose (quaternions (P,24,4)) out of the pose range or turning too
+    fast; every joint of a pose with a NaN."""
+    q = np.asarray(quats, np.float64)
+    finite = np.isfinite(q).all(axis=(1, 2))
+    norm = np.linalg.norm(np.where(np.isfinite(q), q, 0.0), axis=-1, keepdims=True)
+    safe = np.where(finite[:, None, None] & (norm > 0), q / np.where(norm > 0, norm, 1.0), [1.0, 0.0, 0.0, 0.0])
+    bad = pose_range.implausible(sk.rot_from_quat(safe), fps)
+    out = bad["range"] | bad["speed"]
+    out[~finite] = True
+    return out
+
+
 def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: Path, seed: int,
-             mocapctl, height: float = 0.0, root_unit: float = 1.0, model_offsets=None) -> ClipResult:
+             mocapctl, height: float = 0.0, root_unit: float = 1.0, model_offsets=None,
+             pose_range=None) -> ClipResult:
     from .dropout_eval import replay_command
     from .synth_capture import load_truth, synth_capture
     cap = workdir / f"{index:02d}-{motion.name}.cap"
@@ -244,6 +262,8 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
         out.runs[s] = read_replay(poses, metrics, truth)
         if model_offsets is not None:
             out.slide[s] = replay_slide(out.runs[s], model_offsets, out.fps)
+        if pose_range is not None:
+            out.broken[s] = broken_joints(pose_range, out.runs[s].quats, out.fps)
     return out
 
 
@@ -303,6 +323,13 @@ def summarize(clips, settings) -> dict:
         row["truth_foot_slide_cm_s"] = 100.0 * float(np.mean(truth_slide)) if len(truth_slide) else math.nan
         row["contact_precision"] = tp / pp if pp else math.nan
         row["contact_recall"] = tp / tt if tt else math.nan
+        measured = [c.broken[s] for c in clips if s in c.broken]
+        if measured and len(measured) == len(clips):
+            joints = np.concatenate(measured)
+            row["broken_poses"] = int(joints.any(axis=1).sum())
+            row["broken_share"] = row["broken_poses"] / len(joints) if len(joints) else math.nan
+            row["broken_joints"] = {int(j): int(n) for j, n in enumerate(joints.sum(axis=0)) if n}
+            row["broken_clips"] = sum(1 for b in measured if b.any())
         out[s] = row
     return out
 
@@ -347,6 +374,15 @@ def write_report(path: Path, clips, settings, meta: dict, summary: dict) -> Path
         lines.append(f"| {_label(s)} | {_fmt(v['angle'])} | {_fmt(v['pos'])} | {_fmt(v['jitter'])} | "
                      f"{_fmt(v['jitter_ratio'])} | {_fmt(v['jitter_ratio_gm'])} | {lag} |")
     raw = summary[RAW]
+    if "broken_poses" in raw:
+        lines += ["", f"Broken poses (a joint out of the range people's takes or turning faster than "
+                  f"theirs, or a NaN; {meta.get('pose_range', 'pose_range.py')}):", "",
+                  "| output | broken poses | share of poses | clips with any | joints most often broken |",
+                  "|---|---|---|---|---|"]
+        from .dropout_eval import _top_joints
+        for s, v in summary.items():
+            lines.append(f"| {_label(s)} | {v['broken_poses']} | {100.0 * v['broken_share']:.3f} % | "
+                         f"{v['broken_clips']} of {len(clips)} | {_top_joints(v['broken_joints'])} |")
     lines += ["", f"The motion capture's own jitter on the same frames: {_fmt(raw['truth_jitter'])} x10^2 m/s^3.",
               "", "## Root drift", "",
               "| output | drift 2 s (m) | drift 5 s | drift 10 s | the model alone (integrated velocity) 2 / 5 / 10 s "
@@ -368,15 +404,18 @@ def write_report(path: Path, clips, settings, meta: dict, summary: dict) -> Path
               f"slide {_fmt(first['truth_foot_slide_cm_s'], 1)} cm/s (its contact labels include the "
               "roll from heel to toe).", ""]
     lines += findings(summary, settings)
-    lines += ["", "## Per clip (" + _label(settings[0] if settings else RAW) + ")", "",
-              "| clip | seconds | angle (deg) | position (cm) | jitter x truth | drift 10 s (m): engine / model alone |",
-              "|---|---|---|---|---|---|"]
     s0 = settings[0] if settings else RAW
+    with_broken = "broken_poses" in summary[s0]
+    lines += ["", "## Per clip (" + _label(s0) + ")", "",
+              "| clip | seconds | angle (deg) | position (cm) | jitter x truth | drift 10 s (m): engine / model alone |"
+              + (" broken poses |" if with_broken else ""),
+              "|---|---|---|---|---|---|" + ("---|" if with_broken else "")]
     for c, (a, b) in zip(clips, summary[s0]["drift_10s_per_clip"]):
         m = c.runs[s0].metrics
         ratio = m["jitter_100m_s3"] / m["truth_jitter_100m_s3"] if m.get("truth_jitter_100m_s3") else math.nan
         lines.append(f"| {c.name} | {c.seconds:.1f} | {_fmt(m['angle_error_deg'])} | {_fmt(m['position_error_cm'])} | "
-                     f"{_fmt(ratio)} | {_fmt(a, 3)} / {_fmt(b, 3)} |")
+                     f"{_fmt(ratio)} | {_fmt(a, 3)} / {_fmt(b, 3)} |"
+                     + (f" {int(c.broken[s0].any(axis=1).sum())} |" if with_broken else ""))
     path.parent.mkdir(parents=True, exist_ok=True)
     from .files import atomic_write_bytes
     atomic_write_bytes(("\n".join(lines) + "\n").encode(), path, "the engine report")
@@ -410,9 +449,10 @@ def findings(summary, settings) -> list:
 
 # ------------------------------------------------------------------------------ command
 def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=None, progress=print,
-                   body_scale: float = 1.0, height: float = 0.0) -> list:
+                   body_scale: float = 1.0, height: float = 0.0, pose_range=None) -> list:
     """body_scale: every clip on a body that many times the size; height: the performer height
-    given to the engine (0: none), its root then read back in the performer's metres."""
+    given to the engine (0: none), its root then read back in the performer's metres;
+    pose_range (pose_range.PoseRange): what a broken pose is (None: not counted)."""
     from .ort import mocapctl_path, model_info
     mocapctl = mocapctl_path(require_onnx=True)
     root_unit = 1.0
@@ -429,7 +469,8 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
         for i, m in enumerate(motions):
             t0 = time.monotonic()
             clips.append(run_clip(scaled_motion(m, body_scale), i, model, settings, sensors, root,
-                                  seed + i, mocapctl, height, root_unit, info["rest_offsets"]))
+                                  seed + i, mocapctl, height, root_unit, info["rest_offsets"],
+                                  pose_range))
             if progress:
                 progress(f"  {i + 1}/{len(motions)} {m.name}: {len(clips[-1].runs)} replays in "
                          f"{time.monotonic() - t0:.0f} s")
@@ -492,11 +533,15 @@ def add_arguments(p=None):
     p.add_argument("--out", default=None, help="the report (default training/results/engine.md, "
                    "training/results/test/engine.md for --split test)")
     p.add_argument("--keep", default=None, help="keep the captures and poses in this folder")
+    p.add_argument("--pose-range", default="train",
+                   help="what a broken pose is judged against: train (the CMU training people's "
+                        "range of motion; default), none (not counted), or a file that "
+                        "`python3 -m training pose-range --out` saved")
     return p
 
 
 def main(args=None) -> int:
-    from .dropout_eval import _shown, capture_sensors, load_clips, report_path, source_argv
+    from .dropout_eval import _shown, capture_sensors, load_clips, pose_range_of, report_path, source_argv
     if args is None or isinstance(args, list):
         args = add_arguments().parse_args(args)
     model = Path(args.model)
@@ -509,8 +554,9 @@ def main(args=None) -> int:
     print(f"engine-eval: {len(motions)} clips ({source}), {len(sensors)} sensors, model {_shown(model)}, "
           f"output {', '.join(_label(s) for s in [RAW] + settings)}")
     started = time.monotonic()
+    pose_range, range_note = pose_range_of(args.pose_range)
     clips = run_evaluation(motions, model, settings, sensors, args.seed, args.keep,
-                           body_scale=args.body_scale, height=args.height)
+                           body_scale=args.body_scale, height=args.height, pose_range=pose_range)
     argv = source_argv(args) + ["--seed", str(args.seed)]
     if args.body_scale != 1.0:
         argv += ["--body-scale", f"{args.body_scale:g}"]
@@ -524,7 +570,10 @@ def main(args=None) -> int:
         argv += ["--smoothing", *settings]
     if args.out:
         argv += ["--out", _shown(args.out)]
-    meta = {"source": source, "sensors": sensors, "model": _shown(model),
+    if args.pose_range != "train":
+        argv += ["--pose-range", args.pose_range if args.pose_range == "none" else _shown(args.pose_range)]
+    meta = {"pose_range": (f"`python3 -m training pose-range`: {pose_range.source}"
+                           if pose_range is not None else range_note), "source": source, "sensors": sensors, "model": _shown(model),
             "body_scale": args.body_scale, "height": args.height,
             "command": "python3 -m training engine-eval " + " ".join(shlex.quote(a) for a in argv),
             "elapsed_s": time.monotonic() - started}

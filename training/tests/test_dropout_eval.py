@@ -338,7 +338,7 @@ def test_a_contract_two_model_runs_on_seven_sensors_and_on_six_without_its_optio
     assert de.model_info(model) == (2, seven, ("chest",))
     assert de.session_sensors_argument(seven) == \
         "pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=6"
-    common = ["--procedural", "--clips", "1", "--clip-seconds", "10", "--seconds", "2", "--model", str(model)]
+    common = ["--procedural", "--pose-range", "none", "--clips", "1", "--clip-seconds", "10", "--seconds", "2", "--model", str(model)]
     out7, keep7 = tmp_path / "seven.md", tmp_path / "k7"
     assert de.main(common + ["--segments", "chest", "--out", str(out7), "--keep", str(keep7)]) == 0
     text = out7.read_text()

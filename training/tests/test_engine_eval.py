@@ -1,6 +1,7 @@
 """engine-eval: the drift, lag and contact measures on series whose answer is known, and one
 short run through mocapctl whose figures agree with mocapctl's own."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -69,14 +70,24 @@ def test_bad_options_are_usage_errors(tmp_path):
 @needs_ort
 def test_a_short_run_through_mocapctl_agrees_with_mocapctls_own_figures(tmp_path):
     out, keep = tmp_path / "engine.md", tmp_path / "keep"
+    # Broken poses judged against a range the test makes: the procedural motions', with the right
+    # elbow allowed only straight, which the model's bent elbow leaves in every pose.
+    from training import dropout_eval as de, pose_range
+    limits = pose_range.build_pose_range(de.procedural_clips(5, 10.0, 7), source="test motions")
+    limits.covers[19] = np.array([[1.0, 0.0, 0.0, 0.0]])
+    saved = limits.save(tmp_path / "range.npz")
     assert ee.main(["--procedural", "--clips", "2", "--clip-seconds", "16", "--smoothing", "2,12", "6,12",
-                    "--out", str(out), "--keep", str(keep)]) == 0
+                    "--out", str(out), "--keep", str(keep), "--pose-range", str(saved)]) == 0
     text = out.read_text()
     assert "python3 -m training engine-eval --procedural --clips 2 --clip-seconds 16 --seed 0 " \
            "--smoothing 2,12 6,12" in text
     for row in ("| raw model output (--smoothing 0) |", "| --smoothing 2,12 (the engine's default) |",
                 "| --smoothing 6,12 |"):
-        assert text.count(row) == 2, row          # the filter table and the drift table
+        assert text.count(row) == 3, row          # the filter, broken-pose and drift tables
+    assert "`python3 -m training pose-range`: test motions" in text
+    broken = re.search(r"^\| raw model output \(--smoothing 0\) \| (\d+) \| 100\.000 % \| 2 of 2 \| "
+                       r"right_elbow (\d+)", text, re.M)
+    assert broken and broken.group(1) == broken.group(2), text
     # This module's drift windows over the replayed poses are mocapctl's (--metrics-json).
     from training.synth_capture import load_truth
     import json
@@ -124,7 +135,7 @@ def test_scaled_motion_scales_the_body_and_its_path_only():
 @needs_ort
 def test_a_height_reaches_the_engine_and_drift_is_read_in_the_performers_metres(tmp_path):
     out, keep = tmp_path / "engine.md", tmp_path / "keep"
-    assert ee.main(["--procedural", "--clips", "1", "--clip-seconds", "16", "--body-scale", "1.14",
+    assert ee.main(["--procedural", "--pose-range", "none", "--clips", "1", "--clip-seconds", "16", "--body-scale", "1.14",
                     "--height", "1.96", "--out", str(out), "--keep", str(keep)]) == 0
     text = out.read_text()
     assert "--body-scale 1.14 --height 1.96" in text
@@ -170,7 +181,7 @@ def test_smoothing_that_waits_runs_through_mocapctl(tmp_path):
     # frames, so they align with the raw ones and the latency is the frame waited for; less
     # jitter than the raw output at about its angle error
     out, keep = tmp_path / "engine.md", tmp_path / "keep"
-    assert ee.main(["--procedural", "--clips", "2", "--clip-seconds", "16", "--smoothing", "wait1",
+    assert ee.main(["--procedural", "--pose-range", "none", "--clips", "2", "--clip-seconds", "16", "--smoothing", "wait1",
                     "--out", str(out), "--keep", str(keep)]) == 0
     assert out.read_text().count("| --smoothing wait1 |") == 2
     from training.synth_capture import load_truth
@@ -213,7 +224,7 @@ def test_pin_settings_are_read_and_checked():
 @needs_ort
 def test_foot_pinning_runs_through_mocapctl_and_slows_planted_feet(tmp_path):
     out = tmp_path / "engine.md"
-    assert ee.main(["--procedural", "--clips", "2", "--clip-seconds", "16", "--smoothing", "2,12",
+    assert ee.main(["--procedural", "--pose-range", "none", "--clips", "2", "--clip-seconds", "16", "--smoothing", "2,12",
                     "2,12+pin0.06", "--out", str(out)]) == 0
     text = out.read_text()
     slide = {}

@@ -658,7 +658,7 @@ static void ease_returning_sensors(const mocap_solver *s, character *ch, const m
             ch->returning &= ~bit;
             continue;
         }
-        if (!sensor_live(sf)) {
+        if (!sensor_live(sf) || (mask && mask[k] == 0.0f)) {   /* nothing, or nothing usable */
             ch->stood_in &= ~bit;
             ch->returning &= ~bit;
             continue;
