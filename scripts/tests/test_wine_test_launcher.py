@@ -2,7 +2,8 @@
 
 A stand-in for the wine binary (MOCAP_WINE_BINARY) plays the ways a start can go: a program
 that never got to print (started again, at most three starts in all), one that printed and
-failed (a real failure: never started again), and one that passes."""
+failed (a real failure: never started again), one whose host loader aborted at teardown (started
+again), and one that passes."""
 
 import os
 import subprocess
@@ -47,6 +48,34 @@ def test_a_program_that_printed_and_failed_is_a_failure_and_not_started_again(tm
     assert len(starts) == 1
     assert "[  FAILED  ] OscEncoder.NestedBundles" in result.stdout
     assert "under Wine before printing anything" not in result.stderr
+
+
+LOADER_ABORT = ("Inconsistency detected by ld.so: dl-fini.c: 87: _dl_fini: Assertion "
+                "`ns != LM_ID_BASE || i == nloaded' failed!")
+
+
+def loader_abort_file(tmp_path):
+    """The abort message in a file, so its quotes and backticks reach stderr as they are."""
+    path = tmp_path / "loader-abort"
+    path.write_text(LOADER_ABORT + "\n")
+    return path
+
+
+def test_a_host_loader_abort_at_teardown_is_started_again(tmp_path):
+    abort = loader_abort_file(tmp_path)
+    result, starts = launch(tmp_path, 'echo "[  PASSED  ] 1 test."\n'
+                                      f'if [ "$n" -lt 2 ]; then cat "{abort}" >&2; exit 127; fi\n'
+                                      "exit 0")
+    assert result.returncode == 0
+    assert len(starts) == 2
+    assert "after Wine's host loader aborted at process teardown (start 1 of 3)" in result.stderr
+
+
+def test_a_host_loader_abort_every_time_stays_a_failure(tmp_path):
+    abort = loader_abort_file(tmp_path)
+    result, starts = launch(tmp_path, f'echo "[  PASSED  ] 1 test."; cat "{abort}" >&2; exit 127')
+    assert result.returncode == 127
+    assert len(starts) == 3
 
 
 def test_three_silent_failures_give_the_last_exit_status(tmp_path):
