@@ -311,22 +311,25 @@ def session_sensors_argument(sensors) -> str:
     return ",".join(f"{name}={node}" for name, node in zip(sensors, node_ids(sensors)))
 
 
-def replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors=DEFAULT_SENSORS) -> list:
+def replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors=DEFAULT_SENSORS,
+                   pose_limits: float = 0.0) -> list:
     """mocapctl replay of a capture of these sensors through the model, against its truth, with
-    the poses and the accuracy figures written to files."""
+    the poses and the accuracy figures written to files; pose_limits: --pose-limits (0: off)."""
     cmd = [str(mocapctl), "replay", str(capture), "--model", str(model), "--truth", str(truth_csv),
            "--pose-csv", str(poses), "--metrics-json", str(metrics)]
     if tuple(sensors) != tuple(DEFAULT_SENSORS):
         cmd += ["--sensors", session_sensors_argument(sensors)]
+    if pose_limits:
+        cmd += ["--pose-limits", f"{pose_limits:g}"]
     return cmd
 
 
 def replay(mocapctl, capture: Path, truth_csv: Path, model, workdir: Path, stem: str,
-           sensors=DEFAULT_SENSORS):
+           sensors=DEFAULT_SENSORS, pose_limits: float = 0.0):
     """mocapctl replay with the model, a session of the capture's sensors: (time_s, flags, root,
     quats, metrics json)."""
     poses, metrics = workdir / f"{stem}.poses.csv", workdir / f"{stem}.metrics.json"
-    cmd = replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors)
+    cmd = replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors, pose_limits)
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         raise CommandError(f"mocapctl replay {capture.name} failed (status {r.returncode}): "
@@ -467,9 +470,10 @@ def gap_window(motion: sk.Motion, gap_s: float, lead_in: float = LEAD_IN_S) -> W
 
 def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Path, seed: int,
                   world: str = "enu", mocapctl=None, sensors=DEFAULT_SENSORS,
-                  pose_range=None) -> list:
+                  pose_range=None, pose_limits: float = 0.0) -> list:
     """Every condition ("none" first, then each segment silent) of one clip -> [ConditionScore].
-    sensors: the capture's (and the session's) sensor set; pose_range: see score_condition."""
+    sensors: the capture's (and the session's) sensor set; pose_range: see score_condition;
+    pose_limits: the engine's pose guard (mocapctl --pose-limits; 0: off)."""
     from .ort import mocapctl_path
     from .synth_capture import Silence, load_truth, synth_capture
     mocapctl = mocapctl or mocapctl_path(require_onnx=True)
@@ -486,7 +490,7 @@ def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Pat
                       silences=silences, sensors=sensors)
         truth = load_truth(cap.with_suffix(".truth.npz"))
         time_s, flags, root, quats, metrics = replay(mocapctl, cap, cap.with_suffix(".truth.csv"),
-                                                     model, workdir, stem, sensors)
+                                                     model, workdir, stem, sensors, pose_limits)
         run = align_to_truth(time_s, flags, root, quats, truth, metrics)
         err = frame_errors(run)
         bone = None if condition == NONE else bones[condition]
@@ -803,9 +807,9 @@ def write_report(path: Path, scores, meta: dict) -> Path:
 # ------------------------------------------------------------------------------ command
 def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, model=DEFAULT_MODEL,
                    seed: int = 0, workdir=None, progress=print, sensors=DEFAULT_SENSORS,
-                   pose_range=None) -> list:
+                   pose_range=None, pose_limits: float = 0.0) -> list:
     """Every clip's conditions -> [ConditionScore] (clip order, "none" first in each clip);
-    pose_range: see score_condition."""
+    pose_range: see score_condition; pose_limits: see evaluate_clip."""
     from .ort import mocapctl_path
     mocapctl = mocapctl_path(require_onnx=True)
     scores = []
@@ -817,7 +821,8 @@ def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, mode
             t0 = time.monotonic()
             clip_scores = evaluate_clip(motion, segments, gap_s, model, d, seed + i,
                                         world="enu" if i % 2 == 0 else "nwu", mocapctl=mocapctl,
-                                        sensors=sensors, pose_range=pose_range)
+                                        sensors=sensors, pose_range=pose_range,
+                                        pose_limits=pose_limits)
             scores += clip_scores
             if progress:
                 worst = max((s.recovery for s in clip_scores[1:]), default=math.nan)
@@ -919,6 +924,7 @@ def source_argv(args) -> list:
 
 
 _SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
+POSE_LIMITS = number_type(float, lambda v: v == 0 or 1 <= v <= 90, "0 (off) or a tolerance from 1 to 90 deg")
 
 
 def add_arguments(p=None):
@@ -942,6 +948,8 @@ def add_arguments(p=None):
                    help="what a broken pose is judged against: train (the CMU training people's "
                         "range of motion, measured once and cached; default), none (not counted), "
                         "or a file that `python3 -m training pose-range --out` saved")
+    p.add_argument("--pose-limits", type=POSE_LIMITS, default=0.0, metavar="DEG",
+                   help="the engine's pose guard, mocapctl replay --pose-limits DEG (default 0: off)")
     return p
 
 
@@ -972,8 +980,9 @@ def main(args=None) -> int:
     started = time.monotonic()
     pose_range, range_note = pose_range_of(args.pose_range)
     notes = [range_note]
+    pose_limits = getattr(args, "pose_limits", 0.0)
     scores = run_evaluation(motions, segments, args.seconds, model, args.seed, args.keep,
-                            sensors=sensors, pose_range=pose_range)
+                            sensors=sensors, pose_range=pose_range, pose_limits=pose_limits)
     command = "python3 -m training missing-sensor " + " ".join(shlex.quote(a) for a in _argv_of(args))
     left_out = [s for s in model_sensors if s not in sensors]
     if left_out:
@@ -988,6 +997,10 @@ def main(args=None) -> int:
                  "or the head moves over 4 s towards its bone's usual orientation"
                  + (" (all marked present: the mask, imu_mask 0 with zero inputs, is for a sensor "
                     "the capture lacks)." if masked else "."))
+    if pose_limits:
+        notes.append(f"The engine's pose guard is on (mocapctl --pose-limits {pose_limits:g}): a joint "
+                     f"further than {pose_limits:g} deg from the range people's joints take is turned "
+                     "back to that distance.")
     notes.append("A silent pelvis is never masked (every model reads the body in its frame): it is "
                  "fed its last sample turned about the vertical by the shins' mean heading change "
                  "since it was last live, at rest (zero acceleration).")
@@ -1022,6 +1035,8 @@ def _argv_of(args) -> list:
         out += ["--out", _shown(args.out)]
     if args.pose_range != "train":
         out += ["--pose-range", args.pose_range if args.pose_range == "none" else _shown(args.pose_range)]
+    if getattr(args, "pose_limits", 0.0):
+        out += ["--pose-limits", f"{args.pose_limits:g}"]
     return out
 
 

@@ -251,9 +251,10 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
     for s in (RAW, *[x for x in settings if x != RAW]):
         tag = "raw" if s == RAW else s.replace(",", "_")
         poses, metrics = cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json")
-        smoothing, pin = split_setting(s)
+        smoothing, pin, limit = setting_parts(s)
         cmd = (replay_command(mocapctl, cap, cap.with_suffix(".truth.csv"), model, poses, metrics, sensors)
                + ["--smoothing", smoothing] + (["--foot-pin", f"{pin:g}"] if pin else [])
+               + (["--pose-limits", f"{limit:g}"] if limit else [])
                + (["--height", f"{height:g}"] if height else []))
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
@@ -344,9 +345,10 @@ def _fmt(v, digits=2) -> str:
 def _label(s: str) -> str:
     if s == RAW:
         return "raw model output (--smoothing 0)"
-    smoothing, pin = split_setting(s)
-    if pin:
-        return f"--smoothing {smoothing} --foot-pin {pin:g}"
+    smoothing, pin, limit = setting_parts(s)
+    if pin or limit:
+        return (f"--smoothing {smoothing}" + (f" --foot-pin {pin:g}" if pin else "")
+                + (f" --pose-limits {limit:g}" if limit else ""))
     return f"--smoothing {s}" + (" (the engine's default)" if s == ENGINE_SMOOTHING else "")
 
 
@@ -483,10 +485,20 @@ SMOOTHING = number_type(str, lambda v: _smoothing_ok(v),
 PIN_TAG = "+pin"
 
 
+LIMIT_TAG = "+limit"
+
+
+def setting_parts(setting: str) -> tuple:
+    """(the --smoothing part, the --foot-pin speed or 0.0, the --pose-limits tolerance or 0.0) of
+    an output setting "S[+pinV][+limitD]"."""
+    rest, tag, limit = setting.partition(LIMIT_TAG)
+    smoothing, ptag, pin = rest.partition(PIN_TAG)
+    return smoothing, (float(pin) if ptag else 0.0), (float(limit) if tag else 0.0)
+
+
 def split_setting(setting: str) -> tuple:
-    """(the --smoothing part, the --foot-pin speed or 0.0) of an output setting "S[+pinV]"."""
-    smoothing, tag, pin = setting.partition(PIN_TAG)
-    return smoothing, (float(pin) if tag else 0.0)
+    """(the --smoothing part, the --foot-pin speed or 0.0) of an output setting."""
+    return setting_parts(setting)[:2]
 HEIGHT = number_type(float, lambda v: 1.0 <= v <= 2.5, "a height from 1 to 2.5 m")
 
 
@@ -497,6 +509,13 @@ def wait_frames(setting: str) -> int:
 
 
 def _smoothing_ok(v: str) -> bool:
+    v, ltag, limit = v.partition(LIMIT_TAG)
+    if ltag:
+        try:
+            if not 1.0 <= float(limit) <= 90.0:
+                return False
+        except ValueError:
+            return False
     v, tag, pin = v.partition(PIN_TAG)
     if tag:
         try:

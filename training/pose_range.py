@@ -2,7 +2,7 @@
 from one that is only wrong.
 
     python3 -m training pose-range [--split train] [--every 1] [--frame-step 2]
-        [--check val,test] [--out FILE]
+        [--check val,test] [--out FILE] [--engine-table FILE.c]
 
 While a sensor is silent the model must guess its bone, and a guess can be far from what the
 person did and still be a pose a person takes (the arm hanging while the real one was raised: a
@@ -18,6 +18,12 @@ judged on), every --frame-step-th frame, and cached under training/data/pose_ran
 prints how many frames of those splits' own motion capture it calls implausible (it should call
 almost none: a person's pose is plausible by definition); --out saves the range to a file too
 (`missing-sensor --pose-range FILE` reads it).
+
+--engine-table writes the engine's copy of the range (Native~/src/pose/pose_range_table.c): a
+thinner cover, one rotation per ENGINE_COVER_DEG cell, quantised to int8, which the engine's pose
+guard (pose_limits.c, `mocap_solver_set_pose_limits`) pulls a joint back towards when the model
+bends it further than the guard's tolerance from all of them. `guard_quats` is the same rule in
+numpy, the reference the engine's tests and the evaluations are checked against.
 """
 from __future__ import annotations
 
@@ -42,6 +48,15 @@ SPEED_MARGIN = 1.5
 MIN_SPEED_LIMIT_DEG_S = 90.0
 
 CACHE_DIR = Path(__file__).resolve().parent / "data" / "pose_range"
+ENGINE_TABLE = (Path(__file__).resolve().parent.parent / "Packages" / "com.mocap.imu" / "Native~"
+                / "src" / "pose" / "pose_range_table.c")
+# The engine's cover: coarse enough to stay small (11,000 rotations), fine enough that its
+# distances are within a few degrees of the full cover's. With the guard's tolerance 5 deg inside
+# OUT_OF_RANGE_DEG, a guarded pose is never counted out of range for the coarser cover.
+ENGINE_COVER_DEG = 15.0
+ENGINE_SCALE = 127
+# A joint the guard left at the tolerance stays put when guarded again, rounding notwithstanding.
+GUARD_SLACK_DEG = 1e-5
 
 
 def canonical_quats(local_rot) -> np.ndarray:
@@ -144,6 +159,88 @@ def build_pose_range(motions, frame_step: int = 2, source: str = "") -> PoseRang
     return PoseRange(covers, np.maximum(limit, MIN_SPEED_LIMIT_DEG_S), source)
 
 
+def engine_cover(pose_range: PoseRange, cover_deg: float = ENGINE_COVER_DEG) -> list:
+    """Per joint, one rotation of the range per cell of a cover_deg grid on the quaternion (the
+    first in the cover's order, so a real rotation of the range), quantised as the engine stores
+    them: int8 components, ENGINE_SCALE for 1. The root (its global orientation) gets none."""
+    grid = deg_to_chord(cover_deg)
+    out = [np.zeros((0, 4), np.int8)]
+    for c in pose_range.covers[1:]:
+        keys = np.round(c / grid).astype(np.int32)
+        _, first = np.unique(keys, axis=0, return_index=True)
+        pts = c[np.sort(first)]
+        out.append(np.clip(np.round(pts * ENGINE_SCALE), -127, 127).astype(np.int8))
+    return out
+
+
+def guard_quats(quats, cover, tolerance_deg: float):
+    """The engine's pose guard in numpy: quats (P, 24, 4) local rotations (w, x, y, z) -> (guarded
+    copy, (P, 24) bool of the joints it moved). A joint further than tolerance_deg from every
+    rotation of its cover (engine_cover) is turned back along the shortest way towards the
+    nearest one until it is tolerance_deg from it."""
+    q = np.asarray(quats, np.float64)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    out, moved = q.copy(), np.zeros(q.shape[:2], bool)
+    for j, pts in enumerate(cover):
+        if len(pts) == 0:
+            continue
+        p = pts.astype(np.float64)
+        p /= np.linalg.norm(p, axis=-1, keepdims=True)
+        dots = q[:, j] @ p.T
+        best = np.argmax(np.abs(dots), axis=1)
+        d = dots[np.arange(len(q)), best]
+        near = p[best] * np.sign(np.where(d == 0, 1.0, d))[:, None]
+        half = np.arccos(np.clip(np.abs(d), 0.0, 1.0))          # half the rotation angle
+        far = np.degrees(2.0 * half) > tolerance_deg + GUARD_SLACK_DEG
+        if not far.any():
+            continue
+        t = np.radians(tolerance_deg) / (2.0 * half[far])
+        sh = np.sin(half[far])
+        y = ((np.sin((1.0 - t) * half[far]) / sh)[:, None] * near[far]
+             + (np.sin(t * half[far]) / sh)[:, None] * q[far, j])
+        out[far, j] = y / np.linalg.norm(y, axis=-1, keepdims=True)
+        moved[far, j] = True
+    return out, moved
+
+
+def write_engine_table(path: Path, pose_range: PoseRange, cover_deg: float = ENGINE_COVER_DEG) -> int:
+    """The engine's cover as C source (pose_range_table.h's declarations); returns its size."""
+    cover = engine_cover(pose_range, cover_deg)
+    lines = ["/* The range of each joint's local rotation in the training people's motion capture, for",
+             " * the pose guard (pose_limits.c): one rotation per " f"{cover_deg:g}" " deg cell of a cover of them,",
+             " * quaternions (w, x, y, z) scaled by POSE_RANGE_SCALE. Written by",
+             " * `python3 -m training pose-range --engine-table` from "
+             f"{pose_range.source or 'a pose range'};",
+             " * not edited by hand. */",
+             '#include "pose_range_table.h"', "",
+             "const pose_range_span pose_range_joints[POSE_RANGE_JOINTS] = {"]
+    first = 0
+    for j, pts in enumerate(cover):
+        lines.append(f"    {{{first}, {len(pts)}}},   /* {sk.JOINT_NAMES[j]} */")
+        first += len(pts)
+    lines += ["};", "", f"const int8_t pose_range_points[{max(first, 1)}][4] = {{"]
+    for pts in cover:
+        for k in range(0, len(pts), 6):
+            lines.append("    " + " ".join("{%d,%d,%d,%d}," % tuple(int(v) for v in p)
+                                           for p in pts[k:k + 6]))
+    lines += ["};", ""]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines))
+    return first
+
+
+def read_engine_table(path: Path = ENGINE_TABLE) -> list:
+    """The cover a table of write_engine_table holds (engine_cover's form), read back from its C
+    source: what the engine guards with, without the motion capture it was measured on."""
+    import re
+    text = Path(path).read_text()
+    spans = [(int(a), int(b)) for a, b in re.findall(r"\{(\d+), (\d+)\},\s+/\*", text)]
+    points = np.array(re.findall(r"\{(-?\d+),(-?\d+),(-?\d+),(-?\d+)\},", text), np.int64)
+    if len(spans) != sk.NUM_JOINTS or sum(b for _, b in spans) != len(points):
+        raise ValueError(f"{path}: not a pose range table of {sk.NUM_JOINTS} joints")
+    return [points[a:a + b].reshape(-1, 4).astype(np.int8) for a, b in spans]
+
+
 def _source_key(split: str, every: int, frame_step: int) -> str:
     from . import dataset
     h = hashlib.sha1()
@@ -192,6 +289,9 @@ def add_arguments(p):
                    help="splits whose motion capture is checked against the range (default "
                         "val,test; empty: none)")
     p.add_argument("--out", default=None, help="save the range to this file as well")
+    p.add_argument("--engine-table", default=None, metavar="FILE.c",
+                   help=f"write the engine's copy of the range as C source (the engine's own: "
+                        f"{ENGINE_TABLE.relative_to(ENGINE_TABLE.parents[4])})")
     return p
 
 
@@ -207,6 +307,9 @@ def main(args=None) -> int:
     print(f"pose-range: {r.source}")
     if args.out:
         print(f"  saved to {r.save(Path(args.out))}")
+    if args.engine_table:
+        n = write_engine_table(Path(args.engine_table), r)
+        print(f"  engine table: {n} rotations, one per {ENGINE_COVER_DEG:g} deg cell, -> {args.engine_table}")
     print(f"  out of range: more than {OUT_OF_RANGE_DEG:g} deg from every rotation of the joint "
           f"(cover of {COVER_DEG:g} deg)")
     print(f"  too fast: over {SPEED_MARGIN:g} x the {TOO_FAST_QUANTILE:g} quantile of the joint's speed")

@@ -231,6 +231,19 @@ def test_bad_options_are_usage_errors(tmp_path):
         de.main(["--procedural", "--model", str(tmp_path / "none.onnx")])
 
 
+def test_pose_limits_reach_the_replay_and_bad_ones_are_refused(capsys):
+    plain = de.replay_command("mocapctl", "a.cap", "a.truth.csv", "m.onnx", "p.csv", "m.json")
+    held = de.replay_command("mocapctl", "a.cap", "a.truth.csv", "m.onnx", "p.csv", "m.json",
+                             pose_limits=25.0)
+    assert "--pose-limits" not in plain and held == plain + ["--pose-limits", "25"]
+    for bad in ("0.5", "91", "-1", "x"):
+        with pytest.raises(SystemExit):
+            de.add_arguments().parse_args(["--pose-limits", bad])
+    assert "0 (off) or a tolerance" in capsys.readouterr().err
+    assert de.add_arguments().parse_args(["--pose-limits", "25"]).pose_limits == 25.0
+    assert de.add_arguments().parse_args([]).pose_limits == 0.0
+
+
 @needs_ort
 def test_bad_segment_options_are_usage_errors():
     with pytest.raises(UsageError, match="chest is not a sensor of the capture"):

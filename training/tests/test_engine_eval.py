@@ -221,6 +221,42 @@ def test_pin_settings_are_read_and_checked():
     assert ee._label("2,12+pin0.06") == "--smoothing 2,12 --foot-pin 0.06"
 
 
+def test_limit_settings_are_read_and_checked():
+    assert ee.setting_parts("2,12+limit25") == ("2,12", 0.0, 25.0)
+    assert ee.setting_parts("wait1+pin0.06+limit25") == ("wait1", 0.06, 25.0)
+    assert ee.split_setting("2,12+pin0.06+limit25") == ("2,12", 0.06)
+    for good in ("2,12+limit25", "0+limit2", "wait1+pin0.06+limit90"):
+        assert ee._smoothing_ok(good), good
+    for bad in ("2,12+limit0", "2,12+limit0.5", "2,12+limit91", "2,12+limitx", "+limit25",
+                "2,12+limit25+pin0.06"):
+        assert not ee._smoothing_ok(bad), bad
+    assert ee._label("2,12+limit25") == "--smoothing 2,12 --pose-limits 25"
+    assert ee._label("wait1+pin0.06+limit25") == "--smoothing wait1 --foot-pin 0.06 --pose-limits 25"
+
+
+@needs_ort
+def test_pose_limits_in_the_engine_are_the_reference_guard(tmp_path):
+    """With every sensor live the network reads the same inputs either way, so the engine's
+    guarded poses are pose_range.guard_quats of its raw ones, on the engine's own table."""
+    from training import pose_range as pr
+    from training.synth_capture import load_truth
+    keep = tmp_path / "keep"
+    assert ee.main(["--procedural", "--pose-range", "none", "--clips", "1", "--clip-seconds", "16",
+                    "--smoothing", "0+limit3", "--keep", str(keep), "--out", str(tmp_path / "e.md")]) == 0
+    cap = sorted(keep.glob("*.cap"))[0]
+    truth = load_truth(cap.with_suffix(".truth.npz"))
+    raw = ee.read_replay(cap.with_suffix(".raw.csv"), cap.with_suffix(".raw.json"), truth)
+    held = ee.read_replay(cap.with_suffix(".0+limit3.csv"), cap.with_suffix(".0+limit3.json"), truth)
+    assert len(raw.quats) == len(held.quats) > 500
+    cover = pr.read_engine_table()
+    want, moved = pr.guard_quats(raw.quats, cover, 3.0)
+    assert moved.sum() > len(raw.quats), "a 3 deg tolerance turns joints back"
+    assert not moved[:, 0].any()
+    sign = np.sign(np.sum(want * held.quats, axis=-1, keepdims=True))
+    assert np.abs(want * sign - held.quats).max() < 1e-4
+    assert (held.quats[~moved] == raw.quats[~moved]).all(), "a joint in range is left as it was"
+
+
 @needs_ort
 def test_foot_pinning_runs_through_mocapctl_and_slows_planted_feet(tmp_path):
     out = tmp_path / "engine.md"

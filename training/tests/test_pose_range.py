@@ -71,3 +71,79 @@ def test_no_motion_is_a_usage_error():
     from training.errors import UsageError
     with pytest.raises(UsageError):
         pr.build_pose_range([])
+
+
+def test_the_engine_cover_is_a_thinned_quantised_range(walking_range):
+    motions, r = walking_range
+    cover = pr.engine_cover(r)
+    assert len(cover) == sk.NUM_JOINTS and len(cover[0]) == 0        # the root is not guarded
+    for j in range(1, sk.NUM_JOINTS):
+        c = cover[j]
+        assert c.dtype == np.int8 and 0 < len(c) <= len(r.covers[j])
+        # every rotation of the full cover is near one of the engine's
+        p = c.astype(np.float64) / np.linalg.norm(c.astype(np.float64), axis=1, keepdims=True)
+        near = np.abs(r.covers[j] @ p.T).max(axis=1)
+        assert np.degrees(2 * np.arccos(np.clip(near, -1, 1))).max() < pr.ENGINE_COVER_DEG
+
+
+def test_the_guard_turns_a_broken_joint_back_to_the_tolerance_and_leaves_the_rest(walking_range):
+    motions, r = walking_range
+    cover = pr.engine_cover(r)
+    m = motions[0]
+    q = sk.quat_from_rot(m.local_rot[:200].astype(np.float64))
+    same, moved = pr.guard_quats(q, cover, 25.0)
+    assert not moved.any()
+    assert np.allclose(np.abs(np.sum(same * q, -1)), 1.0, atol=1e-12)
+    rot = m.local_rot[:200].astype(np.float64).copy()
+    rot[50:60, 4] = rot[50:60, 4] @ sk.rot_axis("z", np.radians(90.0))[None]   # a knee sideways
+    bent = sk.quat_from_rot(rot)
+    out, moved = pr.guard_quats(bent, cover, 25.0)
+    assert np.nonzero(moved.any(axis=1))[0].tolist() == list(range(50, 60))
+    assert np.nonzero(moved[50])[0].tolist() == [4]
+    # the guarded knee is at the tolerance from the engine's cover, on the way back from the bend
+    p = cover[4].astype(np.float64)
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    dist = np.degrees(2 * np.arccos(np.clip(np.abs(out[50:60, 4] @ p.T).max(axis=1), -1, 1)))
+    assert np.allclose(dist, 25.0, atol=0.05)
+    before = np.degrees(2 * np.arccos(np.clip(np.abs(bent[50:60, 4] @ p.T).max(axis=1), -1, 1)))
+    gone = np.degrees(2 * np.arccos(np.clip(np.abs(np.sum(out[50:60, 4] * bent[50:60, 4], -1)), -1, 1)))
+    assert np.allclose(gone + 25.0, before, atol=0.05)
+    # the guard's answer is in range for the full cover too: no longer broken
+    assert not r.implausible(sk.rot_from_quat(out), m.fps)["range"].any()
+    again, moved = pr.guard_quats(out, cover, 25.0)
+    assert not moved.any()
+
+
+def test_the_engine_table_written_is_what_the_engine_reads(walking_range, tmp_path):
+    import re
+    _, r = walking_range
+    path = tmp_path / "table.c"
+    n = pr.write_engine_table(path, r)
+    assert all((a == b).all() for a, b in zip(pr.read_engine_table(path), pr.engine_cover(r)))
+    text = path.read_text()
+    spans = [(int(a), int(b)) for a, b in re.findall(r"\{(\d+), (\d+)\},\s+/\*", text)]
+    points = re.findall(r"\{(-?\d+),(-?\d+),(-?\d+),(-?\d+)\},", text)
+    cover = pr.engine_cover(r)
+    assert len(spans) == sk.NUM_JOINTS and spans[0] == (0, 0)
+    assert [b for _, b in spans] == [len(c) for c in cover] and len(points) == n
+    assert f"pose_range_points[{n}][4]" in text
+    first = 0
+    for (a, b), c in zip(spans, cover):
+        assert a == first
+        got = np.array(points[a:a + b], np.int64).reshape(-1, 4)
+        assert (got == c.astype(np.int64)).all()
+        first += b
+
+
+def test_the_engines_table_is_complete():
+    """The committed table: a span per joint, back to back, the root's empty, the rest not."""
+    import re
+    cover = pr.read_engine_table()
+    assert len(cover[0]) == 0 and all(len(c) > 0 for c in cover[1:])
+    text = pr.ENGINE_TABLE.read_text()
+    spans = [(int(a), int(b)) for a, b in re.findall(r"\{(\d+), (\d+)\},\s+/\*", text)]
+    n = int(re.search(r"pose_range_points\[(\d+)\]\[4\]", text).group(1))
+    assert len(spans) == sk.NUM_JOINTS and spans[0][1] == 0
+    assert all(b > 0 for _, b in spans[1:])
+    assert [a for a, _ in spans] == list(np.cumsum([0] + [b for _, b in spans[:-1]]))
+    assert sum(b for _, b in spans) == n == len(re.findall(r"\{-?\d+,-?\d+,-?\d+,-?\d+\},", text))

@@ -202,6 +202,8 @@ namespace Mocap.Imu
         [Range(0, SolverConfig.MaxSmoothingDelayFrames)] public int smoothingDelayFrames;
         [Tooltip("Foot pinning: a planted foot stays where it touched down (the leg bends to reach it), sliding at most this fast (m/s). 0.06 leaves about the slide of real feet rolling heel to toe; 0 = off (the predicted legs as they are).")]
         [Range(0f, SolverConfig.MaxFootPinSlideSpeed)] public float footPinSlideSpeed = 0.06f;
+        [Tooltip("Pose limits: a joint the model bends where no person's joint goes is turned back to within this many degrees of the range people's joints take. 25 keeps out poses nobody takes and leaves every other pose as it is; 0 = off.")]
+        [Range(0f, SolverConfig.MaxPoseLimitDegrees)] public float poseLimitDegrees = 25f;
 
         [Header("Characters (one sensor set each)")]
         [Tooltip("One entry per performer: each has its own sensor set and drives its own avatar.")]
@@ -275,6 +277,7 @@ namespace Mocap.Imu
                 SmoothingBeta = smoothingBeta,
                 SmoothingDelayFrames = smoothingDelayFrames,
                 FootPinSlideSpeed = footPinSlideSpeed,
+                PoseLimitDegrees = SolverConfig.PoseLimitFrom(poseLimitDegrees),
             };
         }
 

@@ -47,7 +47,7 @@ extern "C" {
 #endif
 
 #define MOCAP_API_VERSION 6
-#define MOCAP_API_VERSION_MINOR 4
+#define MOCAP_API_VERSION_MINOR 5
 /* The most sensors one session (one character) carries: a HiPNUC gateway's limit. A session's
  * own count comes from its config; no array below is filled beyond it. */
 #define MOCAP_MAX_SENSORS 16
@@ -612,6 +612,20 @@ MOCAP_API mocap_status mocap_solver_set_smoothing_delay(mocap_solver *solver, in
  * contacts and the rest of the body are unchanged. 0 (the default) turns it off. Before
  * mocap_solver_start; one thread. */
 MOCAP_API mocap_status mocap_solver_set_foot_pinning(mocap_solver *solver, float slide_m_s);
+/* The tolerances mocap_solver_set_pose_limits takes besides 0, degrees. */
+#define MOCAP_POSE_LIMITS_MIN_DEG 1.0f
+#define MOCAP_POSE_LIMITS_MAX_DEG 90.0f
+/* (API 6.5) Pose limits: with tolerance_deg > 0, a joint the model bends where no person's joint
+ * goes is turned back before anything else reads the pose. Each joint's local rotation (the
+ * root's global orientation excepted) is compared with the range of rotations that joint takes
+ * in the training people's motion capture, built into the engine; one further than tolerance_deg
+ * from all of them is turned along the shortest way until it is tolerance_deg away; the pose
+ * handed out is guarded again after smoothing (the range is not convex, so an average of
+ * guarded poses can leave it). A pose within the range passes unchanged. 25 keeps every joint within the range `python3 -m training
+ * pose-range` judges broken poses by (30 deg). The SMPL-24 contract's joints and local frames;
+ * the same range serves any model of that contract. 0 (the default) turns it off. Before
+ * mocap_solver_start; one thread. */
+MOCAP_API mocap_status mocap_solver_set_pose_limits(mocap_solver *solver, float tolerance_deg);
 
 /* Counters and health of a solver. A frame whose inference fails (ONNX Runtime out of memory,
  * a model that cannot run these inputs) keeps the character's previous pose and state and is

@@ -275,6 +275,34 @@ TEST_F(MocapctlPose, FootPinOptionHoldsPlantedFeetAndRejectsBadValues)
     }
 }
 
+// --pose-limits reaches the solver: with a tolerance far tighter than any real use most joints
+// are turned back and the root's rotation is not; bad tolerances are refused before anything runs.
+TEST_F(MocapctlPose, PoseLimitsOptionGuardsJointsAndRejectsBadValues)
+{
+    const std::string free = dir + "/free_limits.jsonl", guarded = dir + "/guarded.jsonl";
+    Result r = mocapctl("replay " + capture + " --smoothing 0 --json " + free);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = mocapctl("replay " + capture + " --smoothing 0 --pose-limits 2 --json " + guarded);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    Result check = run("\"" + py + "\" -c \"import json,sys\n"
+                       "free=[json.loads(l) for l in open(sys.argv[1])]\n"
+                       "held=[json.loads(l) for l in open(sys.argv[2])]\n"
+                       "assert len(free)==len(held)>300\n"
+                       "moved=0\n"
+                       "for a,b in zip(free,held):\n"
+                       "    assert a['joint_rotations'][0]==b['joint_rotations'][0]\n"
+                       "    moved+=sum(x!=y for x,y in zip(a['joint_rotations'][1:],b['joint_rotations'][1:]))\n"
+                       "print(moved)\" " + free + " " + guarded);
+    ASSERT_EQ(check.exit_code, 0) << check.output;
+    EXPECT_GT(std::stoi(check.output), 300) << "a 2 deg tolerance turns joints back";
+    for (const char *bad : {"abc", "-1", "0.5", "91", "25deg", "nan"}) {
+        r = mocapctl("replay " + capture + " --json " + dir + "/bad.jsonl --pose-limits " + bad);
+        EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find("--pose-limits wants 0 (off) or a tolerance in degrees"), std::string::npos)
+            << r.output;
+    }
+}
+
 // A realtime stream paced faster than inference loses frames on the way; the engine counts them,
 // and `stream` now says so (before, 1,800 recorded frames became ~1,100 poses without a word).
 // An as-fast-as-possible replay waits for the solver instead and loses nothing.

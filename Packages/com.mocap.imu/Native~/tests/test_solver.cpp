@@ -27,6 +27,7 @@
 extern "C" {
 #include "mocap_math.h"
 #include "onnx_runtime.h"
+#include "pose_limits.h"
 #include "platform.h"
 #include "skeleton_fk.h"
 #include "smpl_skeleton.h"
@@ -546,10 +547,10 @@ mocap_solver_config raw_output_config()
 }
 
 // The poses of one replay solved with the given solver config (nullptr: defaults), smoothing
-// delay and foot pinning.
+// delay, foot pinning and pose limits.
 std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap, const synth_config &cfg,
                                      const mocap_solver_config *config, int32_t smoothing_delay = 0,
-                                     float foot_pin = 0.0f)
+                                     float foot_pin = 0.0f, float pose_limits = 0.0f)
 {
     Sessions sessions;
     sessions.list.push_back(open_replay(cap, cfg));
@@ -559,6 +560,7 @@ std::vector<mocap_pose> solve_replay(mocap_model *model, const std::string &cap,
     if (!sessions.list[0] || mocap_solver_open(model, config, &solver.s) != MOCAP_OK ||
         mocap_solver_set_smoothing_delay(solver.s, smoothing_delay) != MOCAP_OK ||
         mocap_solver_set_foot_pinning(solver.s, foot_pin) != MOCAP_OK ||
+        mocap_solver_set_pose_limits(solver.s, pose_limits) != MOCAP_OK ||
         mocap_solver_add_character(solver.s, sessions.list[0], &ch) != MOCAP_OK ||
         mocap_solver_start(solver.s) != MOCAP_OK || mocap_session_start(sessions.list[0]) != MOCAP_OK) {
         ADD_FAILURE() << mocap_last_error();
@@ -760,6 +762,13 @@ TEST_F(SolverOnShippedModel, SmoothingDelayAndFootPinningAreCheckedAndSetBeforeT
     EXPECT_EQ(mocap_solver_set_foot_pinning(nullptr, 0.06f), MOCAP_ERR_INVALID_ARGUMENT);
     EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, MOCAP_FOOT_PIN_SLIDE_MAX), MOCAP_OK);
     EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, 0.0f), MOCAP_OK);
+    for (float bad : {-1.0f, 0.5f, MOCAP_POSE_LIMITS_MAX_DEG + 1.0f, std::nanf("")}) {
+        EXPECT_EQ(mocap_solver_set_pose_limits(solver.s, bad), MOCAP_ERR_INVALID_ARGUMENT) << bad;
+        EXPECT_NE(std::string(mocap_last_error()).find("pose limits"), std::string::npos);
+    }
+    EXPECT_EQ(mocap_solver_set_pose_limits(nullptr, 25.0f), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(mocap_solver_set_pose_limits(solver.s, MOCAP_POSE_LIMITS_MAX_DEG), MOCAP_OK);
+    EXPECT_EQ(mocap_solver_set_pose_limits(solver.s, 0.0f), MOCAP_OK);
     std::string cap = test_temp_path("smooth_delay_state.cap");
     synth_config cfg = short_capture(23, 1.0, "mixed", cap);
     sessions.list.push_back(open_replay(cap, cfg));
@@ -768,6 +777,49 @@ TEST_F(SolverOnShippedModel, SmoothingDelayAndFootPinningAreCheckedAndSetBeforeT
     ASSERT_EQ(mocap_solver_start(solver.s), MOCAP_OK) << mocap_last_error();
     EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, 1), MOCAP_ERR_STATE);
     EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, 0.06f), MOCAP_ERR_STATE);
+    EXPECT_EQ(mocap_solver_set_pose_limits(solver.s, 25.0f), MOCAP_ERR_STATE);
+}
+
+// Pose limits guard the network's pose and nothing else: with every sensor live the network reads
+// the same inputs either way, so each guarded pose is the guard applied to the free one. A
+// tolerance far tighter than the shipped setting makes the guard act on most frames.
+TEST_F(SolverOnShippedModel, PoseLimitsGuardEachPoseAndLeaveTheRootAlone)
+{
+    std::string cap = test_temp_path("pose_limits.cap");
+    synth_config cfg = short_capture(25, 4.0, "mixed", cap);
+    const mocap_solver_config off = raw_output_config();
+    const float tolerance = 3.0f;
+    std::vector<mocap_pose> free_pose = solve_replay(model.m, cap, cfg, &off);
+    std::vector<mocap_pose> guarded = solve_replay(model.m, cap, cfg, &off, 0, 0.0f, tolerance);
+    ASSERT_GT(free_pose.size(), 200u);
+    ASSERT_EQ(free_pose.size(), guarded.size());
+    pose_limits_state state;
+    pose_limits_reset(&state);
+    size_t turned = 0, outside_before = 0;
+    double worst = 0.0;
+    for (size_t t = 0; t < guarded.size(); ++t) {
+        double q[MOCAP_JOINT_COUNT][4];
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j)
+            for (int i = 0; i < 4; ++i) q[j][i] = free_pose[t].joint_rotations[j][i];
+        for (int j = 1; j < MOCAP_JOINT_COUNT; ++j)
+            if (pose_limits_distance_deg(j, q[j]) > tolerance) ++outside_before;
+        turned += (size_t)pose_limits_apply(&state, tolerance, q, nullptr);
+        for (int i = 0; i < 4; ++i)
+            EXPECT_EQ(guarded[t].joint_rotations[0][i], free_pose[t].joint_rotations[0][i]) << t;
+        for (int j = 1; j < MOCAP_JOINT_COUNT; ++j) {
+            double g[4];
+            for (int i = 0; i < 4; ++i) {
+                g[i] = guarded[t].joint_rotations[j][i];
+                EXPECT_NEAR(g[i], q[j][i], 2e-5) << "pose " << t << " joint " << j;
+            }
+            worst = std::max(worst, pose_limits_distance_deg(j, g));
+        }
+        EXPECT_EQ(guarded[t].foot_contact[0], free_pose[t].foot_contact[0]);
+        EXPECT_EQ(guarded[t].root_velocity[0], free_pose[t].root_velocity[0]);
+    }
+    EXPECT_GT(outside_before, guarded.size()) << "the free poses leave a 3 deg range often";
+    EXPECT_EQ(turned, outside_before);
+    EXPECT_LT(worst, tolerance + 0.01);
 }
 
 // Horizontal speeds (m/s) of the feet in the frames where the pose says a foot is planted (in
@@ -1328,8 +1380,9 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
     EXPECT_EQ(mocap_api_version(), 6);        // 6: sensor sets (counts, segments, states)
-    EXPECT_EQ(mocap_api_version_minor(), 4);  // 6.1: performer height; 6.2: smoothing that waits;
-                                              // 6.3: foot pinning; 6.4: model contract 3
+    EXPECT_EQ(mocap_api_version_minor(), 5);  // 6.1: performer height; 6.2: smoothing that waits;
+                                              // 6.3: foot pinning; 6.4: model contract 3;
+                                              // 6.5: pose limits
     // The sensor-set fields a binding mirrors are in the table too.
     const mocap_field_layout *count = find("mocap_frame", "sensor_count");
     ASSERT_NE(count, nullptr);

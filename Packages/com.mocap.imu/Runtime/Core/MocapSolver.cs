@@ -55,6 +55,27 @@ namespace Mocap.Imu
         /// planted feet about the motion capture's own slide. 0 (the default) shows the predicted
         /// legs as they are.</summary>
         public float FootPinSlideSpeed { get; set; }
+        /// <summary>Tightest <see cref="PoseLimitDegrees"/> besides 0 (MOCAP_POSE_LIMITS_MIN_DEG).</summary>
+        public const float MinPoseLimitDegrees = 1.0f;
+        /// <summary>Widest <see cref="PoseLimitDegrees"/> (MOCAP_POSE_LIMITS_MAX_DEG).</summary>
+        public const float MaxPoseLimitDegrees = 90.0f;
+        /// <summary>Pose limits: with a tolerance &gt; 0 (degrees) a joint the model bends where no
+        /// person's joint goes (further than this from every rotation that joint takes in the
+        /// training people's motion capture) is turned back to that distance before anything
+        /// else reads the pose; poses within the range pass unchanged. 25 keeps joints out of what
+        /// the project's evaluations count as broken. 0 (the default) leaves the pose as the
+        /// model gave it.</summary>
+        public float PoseLimitDegrees { get; set; }
+
+        /// <summary>A tolerance the engine takes from any slider value: 0 or less turns the limits
+        /// off, anything else is held to <see cref="MinPoseLimitDegrees"/> ..
+        /// <see cref="MaxPoseLimitDegrees"/>.</summary>
+        public static float PoseLimitFrom(float degrees)
+        {
+            if (!(degrees > 0f)) return 0f;
+            return degrees < MinPoseLimitDegrees ? MinPoseLimitDegrees
+                : degrees > MaxPoseLimitDegrees ? MaxPoseLimitDegrees : degrees;
+        }
 
         internal unsafe void ToNative(out NativeSolverConfig native)
         {
@@ -140,6 +161,9 @@ namespace Mocap.Imu
             var slide = config?.FootPinSlideSpeed ?? 0f;
             if (status == MocapStatus.Ok && slide != 0f)
                 status = NativeSolverMethods.mocap_solver_set_foot_pinning(handle, slide);
+            var limit = config?.PoseLimitDegrees ?? 0f;
+            if (status == MocapStatus.Ok && limit != 0f)
+                status = NativeSolverMethods.mocap_solver_set_pose_limits(handle, limit);
             if (status != MocapStatus.Ok)
             {
                 var failure = NativeMethods.Failure(status);

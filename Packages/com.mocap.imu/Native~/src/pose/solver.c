@@ -10,6 +10,7 @@
 
 #include "drift.h"
 #include "foot_pin.h"
+#include "pose_limits.h"
 #include "error.h"
 #include "mocap_math.h"
 #include "platform.h"
@@ -53,6 +54,7 @@ typedef struct character {
     int64_t last_frame_ns;      /* monotonic time a frame last became pending (0: never) */
     drift_state drift;
     foot_pin_state pin;
+    pose_limits_state limits;
     pose_filter_state smoothing;
     /* Smoothing that waits: the last frames, oldest first; waiting[next_emit] is the next to
      * become a pose (the ones before it are poses already). */
@@ -107,6 +109,7 @@ struct mocap_solver {
     skeleton sk;
     drift_params drift;
     foot_pin_params pin;
+    double pose_limit_deg;      /* the pose guard's tolerance (0: off) */
     pose_filter_params smoothing;
     int smoothing_delay;        /* frames the centred window waits for (0: the one-euro filter) */
     double smoothing_weights[WAITING_FRAMES]; /* its binomial weights */
@@ -265,6 +268,9 @@ static void emit_pose(mocap_solver *s, int32_t c, const waiting_frame *e, double
     character *ch = s->chars[c];
     double rel[MOCAP_JOINT_COUNT][3];
     const double zero[3] = {0, 0, 0};
+    /* Again after smoothing: the range is not convex, so a filtered or averaged pose of guarded
+     * frames can leave it (40 validation replays, the centred window: 30 poses). */
+    if (s->pose_limit_deg > 0.0) pose_limits_apply(&ch->limits, s->pose_limit_deg, q, NULL);
     skeleton_fk(&s->sk, (const double (*)[4])q, zero, NULL, rel);
     if (!ch->drift.initialized) {
         drift_reset(&ch->drift, s->sk.offsets[0]);
@@ -700,6 +706,8 @@ static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t
     waiting_frame e;
     waiting_frame_of(&e, s, ch, f, taken_ns);
     for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, e.q[j]);
+    /* Before the stand-ins read the pose back, so a silent bone is never fed a broken guess. */
+    if (s->pose_limit_deg > 0.0) pose_limits_apply(&ch->limits, s->pose_limit_deg, e.q, NULL);
     keep_sensor_bones(s, ch, (const double (*)[4])e.q);
     memcpy(e.vel, vel, sizeof e.vel);
     memcpy(e.contact, contact, sizeof e.contact);
@@ -722,6 +730,7 @@ static void reset_character_state(mocap_solver *s, int32_t c)
     memset(ch->state_c, 0, n * sizeof(float));
     ch->drift.initialized = 0;
     pose_filter_reset(&ch->smoothing);
+    pose_limits_reset(&ch->limits);
     ch->have_last_pose = 0;
     ch->have_bones = 0;
     ch->have_headings = 0;
@@ -1258,6 +1267,20 @@ mocap_status mocap_solver_set_foot_pinning(mocap_solver *s, float slide_m_s)
                           "(0: off)", (double)slide_m_s, (double)MOCAP_FOOT_PIN_SLIDE_MAX);
     s->pin.max_offset = slide_m_s > 0.0f ? FOOT_PIN_MAX_OFFSET_M : 0.0;
     s->pin.creep_speed = slide_m_s;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_set_pose_limits(mocap_solver *s, float tolerance_deg)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver is NULL");
+    if (s->started || s->prepared)
+        return mocap_fail(MOCAP_ERR_STATE, "pose limits are set before mocap_solver_start");
+    if (!(tolerance_deg == 0.0f || (tolerance_deg >= MOCAP_POSE_LIMITS_MIN_DEG &&
+                                    tolerance_deg <= MOCAP_POSE_LIMITS_MAX_DEG)))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "pose limits tolerance %g deg is outside "
+                          "%g..%g (0: off)", (double)tolerance_deg, (double)MOCAP_POSE_LIMITS_MIN_DEG,
+                          (double)MOCAP_POSE_LIMITS_MAX_DEG);
+    s->pose_limit_deg = tolerance_deg;
     return MOCAP_OK;
 }
 

@@ -54,6 +54,14 @@ int cli_height(int argc, char **argv, float *out);
 /* --foot-pin SPEED (m/s, for mocap_solver_set_foot_pinning): *out = SPEED, 0 when absent; 2
  * (and a message) when SPEED is not a number in 0..MOCAP_FOOT_PIN_SLIDE_MAX, else 0. */
 int cli_foot_pin(int argc, char **argv, float *out);
+/* --pose-limits DEG (for mocap_solver_set_pose_limits): *out = DEG, 0 when absent; 2 (and a
+ * message) when DEG is neither 0 nor a number in MOCAP_POSE_LIMITS_MIN_DEG..MAX_DEG, else 0. */
+int cli_pose_limits(int argc, char **argv, float *out);
+#define POSE_LIMITS_HELP                                                                         \
+    "  --pose-limits DEG    turn a joint the model bends where no person's joint goes back to\n" \
+    "                       within DEG degrees of the range people's joints take (25 keeps\n"    \
+    "                       poses out of what training's pose-range calls broken; default 0:\n"  \
+    "                       off)\n"
 #define FOOT_PIN_HELP                                                                            \
     "  --foot-pin SPEED     hold planted feet where they landed, bending the legs, letting them\n" \
     "                       slide at most SPEED m/s (0.06 keeps the motion capture's own foot\n"  \

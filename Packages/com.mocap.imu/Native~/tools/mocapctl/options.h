@@ -11,14 +11,15 @@
 #define MOCAPCTL_REPLAY_OPTIONS                                                                   \
     "--truth= --calibration= --prelude= --save-calibration= --csv= --realtime --rate= "         \
     "--model= --out= --bvh-order= --json= --pose-csv= --metrics-json= --smoothing= --height= "  \
-    "--foot-pin= --sensors="
+    "--foot-pin= --pose-limits= --sensors="
 #define MOCAPCTL_LIVE_OPTIONS                                                                     \
     "--port= --baud= --record= --seconds= --model= --pose --smoothing= --height= --foot-pin= "    \
-    "--sensors="
+    "--pose-limits= --sensors="
 #define MOCAPCTL_RECORD_OPTIONS "--port= --out= --baud= --seconds= --sensors="
 #define MOCAPCTL_STREAM_OPTIONS                                                                   \
     "--vmc= --replay= --realtime --fast --speed= --prelude= --port= --baud= --model= --rate= "         \
-    "--seconds= --allow-remote --smoothing= --height= --foot-pin= --sensors="
+    "--seconds= --allow-remote --smoothing= --height= --foot-pin= --pose-limits= "\
+    "--sensors="
 #define MOCAPCTL_BENCH_DECODE_OPTIONS "--seconds="
 #define MOCAPCTL_BENCH_OPTIONS                                                                    \
     "--model= --seconds= --latency-seconds= --tip-seconds= --threads= --max-characters= "       \

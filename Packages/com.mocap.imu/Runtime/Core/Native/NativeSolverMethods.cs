@@ -79,6 +79,9 @@ namespace Mocap.Imu
         internal static extern MocapStatus mocap_solver_set_foot_pinning(SolverHandle solver, float slideMetresPerSecond);
 
         [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_solver_set_pose_limits(SolverHandle solver, float toleranceDegrees);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_solver_get_stats(SolverHandle solver, int character,
                                                                   MocapSolverStats* stats);
 

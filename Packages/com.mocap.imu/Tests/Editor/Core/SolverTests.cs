@@ -600,6 +600,43 @@ namespace Mocap.Imu.Tests
             StringAssert.Contains("foot pinning", e.Message);
         }
 
+        [Test]
+        public void PoseLimitsReachTheEngine()
+        {
+            // A tolerance far tighter than any real use turns most joints back; the root's
+            // orientation and the model's velocity are never touched (the corrected root follows
+            // the guarded feet).
+            Assert.AreEqual(0f, new SolverConfig().PoseLimitDegrees);
+            var free = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingMinCutoffHz = 0f });
+            var guarded = SolverReplay.SolveOneCharacter(_capture, _model,
+                new SolverConfig { SmoothingMinCutoffHz = 0f, PoseLimitDegrees = 2f });
+            Assert.AreEqual(free.Count, guarded.Count);
+            Assert.Greater(free.Count, 100);
+            int turned = 0;
+            for (int i = 0; i < free.Count; i++)
+            {
+                Assert.AreEqual(free[i].GetJointRotation(SmplJoint.Pelvis), guarded[i].GetJointRotation(SmplJoint.Pelvis), $"pose {i}");
+                Assert.AreEqual(free[i].RootVelocity, guarded[i].RootVelocity, $"pose {i}");
+                if (!free[i].GetJointRotation(SmplJoint.LeftShoulder).Equals(guarded[i].GetJointRotation(SmplJoint.LeftShoulder))) turned++;
+            }
+            Assert.Greater(turned, free.Count / 4, "a 2 deg tolerance turns shoulders back");
+            var e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model,
+                new SolverConfig { PoseLimitDegrees = 0.5f }));
+            Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
+            StringAssert.Contains("pose limits", e.Message);
+        }
+
+        [Test]
+        public void APoseLimitFromASliderIsOneTheEngineTakes()
+        {
+            Assert.AreEqual(0f, SolverConfig.PoseLimitFrom(0f));
+            Assert.AreEqual(0f, SolverConfig.PoseLimitFrom(-3f));
+            Assert.AreEqual(0f, SolverConfig.PoseLimitFrom(float.NaN));
+            Assert.AreEqual(SolverConfig.MinPoseLimitDegrees, SolverConfig.PoseLimitFrom(0.2f));
+            Assert.AreEqual(25f, SolverConfig.PoseLimitFrom(25f));
+            Assert.AreEqual(SolverConfig.MaxPoseLimitDegrees, SolverConfig.PoseLimitFrom(400f));
+        }
+
         // Mean horizontal distance a foot moves between two poses that both say it is planted.
         static double PlantedFootSlide(IReadOnlyList<MocapPose> poses)
         {
