@@ -30,21 +30,26 @@ static double dot4(const double a[4], const double b[4])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
 }
 
-/* The point of the span nearest q (largest |q . p|, q and -q being one rotation); its |dot|. */
+/* The point of the span nearest q (largest |q . p| / |p|, q and -q being one rotation), and that
+ * |q . p| / |p|. The points are compared by cross-multiplying squares (|p|^2 is an exact
+ * integer), so the scan needs no square root or division per point. */
 static uint32_t nearest_point(const pose_range_span *span, const double q[4], double *abs_dot)
 {
     uint32_t best = 0;
-    double best_dot = -1.0;
+    double best_dot2 = -1.0, best_norm2 = 1.0;
     for (uint32_t k = 0; k < span->count; ++k) {
-        double p[4];
-        range_point(span, k, p);
-        const double d = fabs(dot4(q, p));
-        if (d > best_dot) {
-            best_dot = d;
+        const int8_t *v = pose_range_points[span->first + k];
+        const double d = q[0] * v[0] + q[1] * v[1] + q[2] * v[2] + q[3] * v[3];
+        const double n2 = (double)(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+        if (d * d * best_norm2 > best_dot2 * n2) {
+            best_dot2 = d * d;
+            best_norm2 = n2;
             best = k;
         }
     }
-    *abs_dot = best_dot;
+    double p[4];
+    range_point(span, best, p);
+    *abs_dot = fabs(dot4(q, p));
     return best;
 }
 
