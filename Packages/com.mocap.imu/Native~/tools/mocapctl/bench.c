@@ -6,6 +6,8 @@
 #include "error.h"
 #include "hipnuc_decoder.h"
 #include "platform.h"
+#include "pose_limits.h"
+#include "pose_range_table.h"
 #include "sensor_set.h"
 #include "solver.h"
 
@@ -376,6 +378,65 @@ static mocap_status run_characters(bench_ctx *b, int characters, double *per_cha
     return MOCAP_OK;
 }
 
+/* A unit quaternion from a xorshift generator: uniform enough on the sphere for a worst case. */
+static void random_rotation(uint32_t *rng, double q[4])
+{
+    double n = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        *rng ^= *rng << 13;
+        *rng ^= *rng >> 17;
+        *rng ^= *rng << 5;
+        q[i] = (double)(*rng & 0xFFFFFF) / (double)0xFFFFFF - 0.5;
+        n += q[i] * q[i];
+    }
+    n = sqrt(n);
+    for (int i = 0; i < 4; ++i) q[i] /= n;
+}
+
+/* Time per pose of the pose limits at 25 deg: joints wandering slowly through their range (what
+ * a model's output does; the guard checks the point it found last) and a pose of random joints,
+ * nearly all outside the range (each joint scans its whole span: the worst case). */
+static void bench_pose_limits(void)
+{
+    enum { POSES = 4000 };
+    pose_limits_state state;
+    pose_limits_reset(&state);
+    double q[POSE_LIMITS_JOINTS][4];
+    uint32_t rng = 0x9E3779B9u;
+    long turned = 0;
+    int64_t t0 = mocap_monotonic_ns();
+    for (int t = 0; t < POSES; ++t) {
+        for (int j = 0; j < POSE_LIMITS_JOINTS; ++j) {
+            const pose_range_span *span = &pose_range_joints[j];
+            if (span->count == 0) {
+                q[j][0] = 1.0; q[j][1] = q[j][2] = q[j][3] = 0.0;
+                continue;
+            }
+            /* a new point of the range every second, a little off it in between */
+            const int8_t *v = pose_range_points[span->first + (uint32_t)(t / 60 + j) % span->count];
+            double n = 0.0;
+            for (int i = 0; i < 4; ++i) {
+                q[j][i] = v[i] + 3.0 * sin(0.05 * t + i + j);
+                n += q[j][i] * q[j][i];
+            }
+            for (int i = 0; i < 4; ++i) q[j][i] /= sqrt(n);
+        }
+        turned += pose_limits_apply(&state, 25.0, q, NULL);
+    }
+    const double near_us = (double)(mocap_monotonic_ns() - t0) / POSES / 1000.0;
+    long far_turned = 0;
+    t0 = mocap_monotonic_ns();
+    for (int t = 0; t < POSES; ++t) {
+        for (int j = 0; j < POSE_LIMITS_JOINTS; ++j) random_rotation(&rng, q[j]);
+        far_turned += pose_limits_apply(&state, 25.0, q, NULL);
+    }
+    const double far_us = (double)(mocap_monotonic_ns() - t0) / POSES / 1000.0;
+    printf("pose limits (--pose-limits 25): %.2f us per pose with its joints moving through their "
+           "range (%ld of %d joint-poses turned back), %.1f us with every joint random (%.1f "
+           "turned back per pose, each a scan of its joint's range), one core\n",
+           near_us, turned, POSES * (POSE_LIMITS_JOINTS - 1), far_us, (double)far_turned / POSES);
+}
+
 static int bench_pipeline(bench_ctx *b)
 {
     double fps = 0, wall = 0, model_us = 0, hwm, rss;
@@ -390,6 +451,7 @@ static int bench_pipeline(bench_ctx *b)
            fps, (unsigned long long)poses, (double)poses / b->info.frame_rate, wall, model_us);
     printf("memory: peak RSS %.0f MB (VmHWM; now %.0f MB) after one character, model loaded  "
            "[goal <= 150]\n", hwm, rss);
+    bench_pose_limits();
     return 0;
 }
 
