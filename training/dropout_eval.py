@@ -924,7 +924,10 @@ def source_argv(args) -> list:
 
 
 _SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
-POSE_LIMITS = number_type(float, lambda v: v == 0 or 1 <= v <= 90, "0 (off) or a tolerance from 1 to 90 deg")
+# The tolerances mocap_solver_set_pose_limits takes besides 0 (MOCAP_POSE_LIMITS_MIN/MAX_DEG).
+POSE_LIMITS_MIN_DEG, POSE_LIMITS_MAX_DEG = 1.0, 90.0
+POSE_LIMITS = number_type(float, lambda v: v == 0 or POSE_LIMITS_MIN_DEG <= v <= POSE_LIMITS_MAX_DEG,
+                          f"0 (off) or a tolerance from {POSE_LIMITS_MIN_DEG:g} to {POSE_LIMITS_MAX_DEG:g} deg")
 
 
 def add_arguments(p=None):

@@ -509,20 +509,16 @@ def wait_frames(setting: str) -> int:
 
 
 def _smoothing_ok(v: str) -> bool:
-    v, ltag, limit = v.partition(LIMIT_TAG)
-    if ltag:
-        try:
-            if not 1.0 <= float(limit) <= 90.0:
-                return False
-        except ValueError:
-            return False
-    v, tag, pin = v.partition(PIN_TAG)
-    if tag:
-        try:
-            if not 0.0 < float(pin) <= 1.0:
-                return False
-        except ValueError:
-            return False
+    from .dropout_eval import POSE_LIMITS_MAX_DEG, POSE_LIMITS_MIN_DEG
+    try:
+        smoothing, pin, limit = setting_parts(v)
+    except ValueError:
+        return False
+    if PIN_TAG in v and not 0.0 < pin <= 1.0:
+        return False
+    if LIMIT_TAG in v and not POSE_LIMITS_MIN_DEG <= limit <= POSE_LIMITS_MAX_DEG:
+        return False
+    v = smoothing
     if v.startswith("wait"):
         return 1 <= wait_frames(v) <= 4
     try:

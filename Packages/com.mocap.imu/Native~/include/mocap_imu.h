@@ -621,8 +621,8 @@ MOCAP_API mocap_status mocap_solver_set_foot_pinning(mocap_solver *solver, float
  * in the training people's motion capture, built into the engine; one further than tolerance_deg
  * from all of them is turned along the shortest way until it is tolerance_deg away; the pose
  * handed out is guarded again after smoothing (the range is not convex, so an average of
- * guarded poses can leave it). A pose within the range passes unchanged. 25 keeps every joint within the range `python3 -m training
- * pose-range` judges broken poses by (30 deg). The SMPL-24 contract's joints and local frames;
+ * guarded poses can leave it). A pose within the range passes unchanged. 25 keeps every joint
+ * within the range `python3 -m training pose-range` judges broken poses by (30 deg). The SMPL-24 contract's joints and local frames;
  * the same range serves any model of that contract. 0 (the default) turns it off. Before
  * mocap_solver_start; one thread. */
 MOCAP_API mocap_status mocap_solver_set_pose_limits(mocap_solver *solver, float tolerance_deg);

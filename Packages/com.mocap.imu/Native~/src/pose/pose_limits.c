@@ -30,10 +30,10 @@ static double dot4(const double a[4], const double b[4])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
 }
 
-/* The point of the span nearest q (largest |q . p| / |p|, q and -q being one rotation), and that
- * |q . p| / |p|. The points are compared by cross-multiplying squares (|p|^2 is an exact
- * integer), so the scan needs no square root or division per point. */
-static uint32_t nearest_point(const pose_range_span *span, const double q[4], double *abs_dot)
+/* The point of the span nearest q (largest |q . p| / |p|, q and -q being one rotation), as an
+ * offset in the span and, in p, a unit quaternion. The points are compared by cross-multiplying
+ * squares (|p|^2 is an exact integer), so the scan needs no square root or division per point. */
+static uint32_t nearest_point(const pose_range_span *span, const double q[4], double p[4])
 {
     uint32_t best = 0;
     double best_dot2 = -1.0, best_norm2 = 1.0;
@@ -47,9 +47,7 @@ static uint32_t nearest_point(const pose_range_span *span, const double q[4], do
             best = k;
         }
     }
-    double p[4];
     range_point(span, best, p);
-    *abs_dot = fabs(dot4(q, p));
     return best;
 }
 
@@ -61,10 +59,10 @@ static double rotation_deg(double abs_dot)
 double pose_limits_distance_deg(int joint, const double q[4])
 {
     if (joint < 0 || joint >= POSE_RANGE_JOINTS || pose_range_joints[joint].count == 0) return -1.0;
-    double u[4], n = sqrt(dot4(q, q)), d;
+    double u[4], p[4], n = sqrt(dot4(q, q));
     for (int i = 0; i < 4; ++i) u[i] = q[i] / n;
-    nearest_point(&pose_range_joints[joint], u, &d);
-    return rotation_deg(d);
+    nearest_point(&pose_range_joints[joint], u, p);
+    return rotation_deg(fabs(dot4(u, p)));
 }
 
 int pose_limits_apply(pose_limits_state *s, double tolerance_deg, double (*q)[4], uint8_t *moved)
@@ -81,17 +79,18 @@ int pose_limits_apply(pose_limits_state *s, double tolerance_deg, double (*q)[4]
         const pose_range_span *span = &pose_range_joints[j];
         const double n = sqrt(dot4(q[j], q[j]));
         if (span->count == 0 || !(n > 0.0) || !isfinite(n)) continue;
-        double u[4], p[4], d;
+        double u[4], p[4];
         for (int i = 0; i < 4; ++i) u[i] = q[j][i] / n;
-        uint32_t k = s->last_nearest[j] < span->count ? s->last_nearest[j] : 0;
-        range_point(span, k, p);
+        const uint32_t last = s->last_nearest[j] < span->count ? s->last_nearest[j] : 0;
+        range_point(span, last, p);
         if (fabs(dot4(u, p)) >= inside) continue;   /* near last frame's point: in range */
-        k = nearest_point(span, u, &d);
-        s->last_nearest[j] = k;
-        if (d >= inside) continue;
-        range_point(span, k, p);
-        if (dot4(u, p) < 0.0)
+        s->last_nearest[j] = nearest_point(span, u, p);
+        double d = dot4(u, p);
+        if (fabs(d) >= inside) continue;
+        if (d < 0.0) {
+            d = -d;
             for (int i = 0; i < 4; ++i) p[i] = -p[i];
+        }
         /* Along the great circle from p to u, stopping at the tolerance. */
         const double omega = acos(d), so = sin(omega);
         const double a = sin(omega - half) / so, b = sin(half) / so;

@@ -11,11 +11,13 @@
 
 #include <stdint.h>
 
+#include "pose_range_table.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-#define POSE_LIMITS_JOINTS 24
+#define POSE_LIMITS_JOINTS POSE_RANGE_JOINTS
 
 typedef struct pose_limits_state {
     uint32_t last_nearest[POSE_LIMITS_JOINTS];   /* offset in the joint's span */

@@ -41,6 +41,13 @@ static void count_frame(void *user, const hipnuc_frame *frame)
     if (frame->sample_count != BENCH_NODES || frame->first_tag != HIPNUC_TAG_GWSOL) c->bad_frames++;
 }
 
+/* The next number of a linear congruential generator, in [0, 1) with 24 bits. */
+static double next_uniform(uint32_t *rng)
+{
+    *rng = *rng * 1664525u + 1013904223u;
+    return (double)(*rng >> 8) * (1.0 / 16777216.0);
+}
+
 /* Plausible, changing sensor values: a slow rotation about a tilted axis plus small noise, so
  * that no two frames are alike (a decoder must not benefit from repeated bytes). */
 static void make_sample(uint32_t node, uint32_t frame, uint32_t *rng, hipnuc_sample *s)
@@ -55,8 +62,7 @@ static void make_sample(uint32_t node, uint32_t frame, uint32_t *rng, hipnuc_sam
     s->quat[2] = 0.48f * sn;
     s->quat[3] = 0.8f * sn;
     for (int i = 0; i < 3; i++) {
-        *rng = *rng * 1664525u + 1013904223u;
-        float noise = (float)(*rng >> 8) * (1.0f / 16777216.0f) - 0.5f;
+        float noise = (float)next_uniform(rng) - 0.5f;
         s->acc_g[i] = (i == 2 ? 1.0f : 0.0f) + 0.02f * noise;
         s->gyr_dps[i] = 30.0f * sinf(angle + (float)i) + noise;
         s->mag_ut[i] = 25.0f * cosf(angle - (float)i) + 0.3f * noise;
@@ -378,15 +384,12 @@ static mocap_status run_characters(bench_ctx *b, int characters, double *per_cha
     return MOCAP_OK;
 }
 
-/* A unit quaternion from a xorshift generator: uniform enough on the sphere for a worst case. */
+/* A unit quaternion from next_uniform: uniform enough on the sphere for a worst case. */
 static void random_rotation(uint32_t *rng, double q[4])
 {
     double n = 0.0;
     for (int i = 0; i < 4; ++i) {
-        *rng ^= *rng << 13;
-        *rng ^= *rng >> 17;
-        *rng ^= *rng << 5;
-        q[i] = (double)(*rng & 0xFFFFFF) / (double)0xFFFFFF - 0.5;
+        q[i] = next_uniform(rng) - 0.5;
         n += q[i] * q[i];
     }
     n = sqrt(n);

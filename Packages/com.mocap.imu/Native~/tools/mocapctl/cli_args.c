@@ -222,7 +222,6 @@ int cli_pose_limits(int argc, char **argv, float *out)
     if (option_in_range(argc, argv, "--pose-limits", 0.0, MOCAP_POSE_LIMITS_MAX_DEG, out, &text) == 0 &&
         (*out == 0.0f || *out >= MOCAP_POSE_LIMITS_MIN_DEG))
         return 0;
-    if (!text) text = "";
     fprintf(stderr, "mocapctl: --pose-limits wants 0 (off) or a tolerance in degrees, %g to %g, "
                     "got '%s'\n", (double)MOCAP_POSE_LIMITS_MIN_DEG, (double)MOCAP_POSE_LIMITS_MAX_DEG, text);
     return 2;
