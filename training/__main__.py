@@ -1,6 +1,6 @@
 """python3 -m training <command>: the pose model's tooling, from motion data to the shipped ONNX.
 
-Commands: prepare | pack | train | average | export | quantize | evaluate | sensor-gain |
+Commands: prepare | pack | train | average | export | quantize | evaluate | sensor-gain | chest-follow |
 synth-capture | missing-sensor | engine-eval | smoothing-study | cv | stride-scaling | usual-orientation | pose-range |
 tip-model.
 
@@ -20,6 +20,7 @@ COMMANDS = {
     "quantize": ("quantize", "int8 weights for the fp32 model (mocap_pose_int8.onnx), checked against it"),
     "evaluate": ("evaluate", "metrics of PyTorch / ONNX models on held-out clips"),
     "sensor-gain": ("sensor_gain", "where a seventh sensor would cut the pose error most (an estimate)"),
+    "chest-follow": ("chest_follow", "how far the engine turns the spine towards a chest sensor"),
     "synth-capture": ("synth_capture", "BVH clip -> raw HiPNUC capture via mocapctl synth"),
     "missing-sensor": ("dropout_eval", "each sensor silent for 5 s in turn, scored through the engine"),
     "engine-eval": ("engine_eval", "output filter, jitter, latency and drift through the engine's whole path"),

@@ -98,6 +98,7 @@ INPUTS = {
     "evaluate": [("bvh", "bvh_or_pack", "--bvh"), ("checkpoint", "file", "--checkpoint"),
                  ("models", "files", "--models")],
     "sensor-gain": [("bvh", "bvh_or_pack", "--bvh"), ("checkpoint", "file", "--checkpoint")],
+    "chest-follow": [("checkpoint", "file", "--checkpoint")],
     "export": [("checkpoint", "file", "--checkpoint")],
     "quantize": [("model", "file", "--model")],
     "average": [("checkpoints", "files", "checkpoint")],

@@ -251,11 +251,8 @@ def run_clip(motion: sk.Motion, index: int, model, settings, sensors, workdir: P
     for s in (RAW, *[x for x in settings if x != RAW]):
         tag = "raw" if s == RAW else s.replace(",", "_")
         poses, metrics = cap.with_suffix(f".{tag}.csv"), cap.with_suffix(f".{tag}.json")
-        smoothing, pin, limit = setting_parts(s)
         cmd = (replay_command(mocapctl, cap, cap.with_suffix(".truth.csv"), model, poses, metrics, sensors)
-               + ["--smoothing", smoothing] + (["--foot-pin", f"{pin:g}"] if pin else [])
-               + (["--pose-limits", f"{limit:g}"] if limit else [])
-               + (["--height", f"{height:g}"] if height else []))
+               + engine_options(s) + (["--height", f"{height:g}"] if height else []))
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise CommandError(f"mocapctl replay {cap.name} --smoothing {s} failed (status "
@@ -295,7 +292,7 @@ def summarize(clips, settings) -> dict:
                   for c in clips if (c.runs[s].metrics.get("truth_jitter_100m_s3") or 0) > 0]
         # a waiting smoother's poses are stamped with their own frames, so they align with the raw
         # ones; its latency is the frames it waits for
-        lags = [filter_lag_ms(c.runs[s].quats, c.runs[RAW].quats, c.fps) + 1000.0 * wait_frames(split_setting(s)[0]) / c.fps
+        lags = [filter_lag_ms(c.runs[s].quats, c.runs[RAW].quats, c.fps) + 1000.0 * wait_frames(setting_parts(s)[0]) / c.fps
                 for c in clips] if s != RAW else []
         row = {"poses": poses, "angle": pooled("angle_error_deg"), "pos": pooled("position_error_cm"),
                "jitter": jit, "truth_jitter": tjit, "jitter_ratio": jit / tjit if tjit else math.nan,
@@ -345,10 +342,8 @@ def _fmt(v, digits=2) -> str:
 def _label(s: str) -> str:
     if s == RAW:
         return "raw model output (--smoothing 0)"
-    smoothing, pin, limit = setting_parts(s)
-    if pin or limit:
-        return (f"--smoothing {smoothing}" + (f" --foot-pin {pin:g}" if pin else "")
-                + (f" --pose-limits {limit:g}" if limit else ""))
+    if any(setting_parts(s)[1:]):
+        return " ".join(engine_options(s))
     return f"--smoothing {s}" + (" (the engine's default)" if s == ENGINE_SMOOTHING else "")
 
 
@@ -437,7 +432,7 @@ def findings(summary, settings) -> list:
                    f"{_fmt(raw['jitter_ratio'])} x), angle error {v['angle'] - raw['angle']:+.3f} deg and "
                    f"position {v['pos'] - raw['pos']:+.3f} cm against the raw output, "
                    f"{_fmt(v['lag_ms'], 0)} ms added latency (median).")
-        if split_setting(s)[1]:
+        if setting_parts(s)[1]:
             out.append(f"- {_label(s)}: planted feet slide {_fmt(v['foot_slide_cm_s'], 1)} cm/s (raw output "
                        f"{_fmt(raw['foot_slide_cm_s'], 1)}, the motion capture's own "
                        f"{_fmt(raw['truth_foot_slide_cm_s'], 1)}).")
@@ -481,24 +476,33 @@ def run_evaluation(motions, model, settings, sensors, seed: int = 0, workdir=Non
 
 SMOOTHING = number_type(str, lambda v: _smoothing_ok(v),
                         "HZ or HZ,BETA with HZ >= 0 and BETA >= 0, or waitN (N frames, 1 to 4), "
-                        "either followed by +pinV (foot pinning, V m/s from 0 to 1)")
+                        "either followed by +pinV (foot pinning, V m/s from 0 to 1), +limitD (pose "
+                        "limits, D deg from 1 to 90) and +chestF (chest following, a share from 0 to 1), "
+                        "in that order")
 PIN_TAG = "+pin"
 
 
 LIMIT_TAG = "+limit"
+CHEST_TAG = "+chest"
 
 
 def setting_parts(setting: str) -> tuple:
-    """(the --smoothing part, the --foot-pin speed or 0.0, the --pose-limits tolerance or 0.0) of
-    an output setting "S[+pinV][+limitD]"."""
-    rest, tag, limit = setting.partition(LIMIT_TAG)
+    """(the --smoothing part, the --foot-pin speed, the --pose-limits tolerance, the
+    --chest-follow share; 0.0 for each one absent) of an output setting
+    "S[+pinV][+limitD][+chestF]"."""
+    rest, ctag, chest = setting.partition(CHEST_TAG)
+    rest, tag, limit = rest.partition(LIMIT_TAG)
     smoothing, ptag, pin = rest.partition(PIN_TAG)
-    return smoothing, (float(pin) if ptag else 0.0), (float(limit) if tag else 0.0)
+    return (smoothing, (float(pin) if ptag else 0.0), (float(limit) if tag else 0.0),
+            (float(chest) if ctag else 0.0))
 
 
-def split_setting(setting: str) -> tuple:
-    """(the --smoothing part, the --foot-pin speed or 0.0) of an output setting."""
-    return setting_parts(setting)[:2]
+def engine_options(setting: str) -> list:
+    """mocapctl's options for an output setting, --smoothing first."""
+    smoothing, pin, limit, chest = setting_parts(setting)
+    return (["--smoothing", smoothing] + (["--foot-pin", f"{pin:g}"] if pin else [])
+            + (["--pose-limits", f"{limit:g}"] if limit else [])
+            + (["--chest-follow", f"{chest:g}"] if chest else []))
 HEIGHT = number_type(float, lambda v: 1.0 <= v <= 2.5, "a height from 1 to 2.5 m")
 
 
@@ -511,8 +515,10 @@ def wait_frames(setting: str) -> int:
 def _smoothing_ok(v: str) -> bool:
     from .dropout_eval import POSE_LIMITS_MAX_DEG, POSE_LIMITS_MIN_DEG
     try:
-        smoothing, pin, limit = setting_parts(v)
+        smoothing, pin, limit, chest = setting_parts(v)
     except ValueError:
+        return False
+    if CHEST_TAG in v and not 0.0 < chest <= 1.0:
         return False
     if PIN_TAG in v and not 0.0 < pin <= 1.0:
         return False

@@ -212,8 +212,8 @@ def test_foot_slide_counts_only_frame_pairs_where_the_foot_stays_planted():
 
 
 def test_pin_settings_are_read_and_checked():
-    assert ee.split_setting("2,12+pin0.06") == ("2,12", 0.06)
-    assert ee.split_setting("wait1") == ("wait1", 0.0)
+    assert ee.setting_parts("2,12+pin0.06") == ("2,12", 0.06, 0.0, 0.0)
+    assert ee.setting_parts("wait1") == ("wait1", 0.0, 0.0, 0.0)
     for good in ("2,12+pin0.06", "wait1+pin0.1", "0+pin1"):
         assert ee._smoothing_ok(good), good
     for bad in ("2,12+pin0", "2,12+pin1.5", "2,12+pinx", "+pin0.06", "wait0+pin0.06"):
@@ -222,9 +222,8 @@ def test_pin_settings_are_read_and_checked():
 
 
 def test_limit_settings_are_read_and_checked():
-    assert ee.setting_parts("2,12+limit25") == ("2,12", 0.0, 25.0)
-    assert ee.setting_parts("wait1+pin0.06+limit25") == ("wait1", 0.06, 25.0)
-    assert ee.split_setting("2,12+pin0.06+limit25") == ("2,12", 0.06)
+    assert ee.setting_parts("2,12+limit25") == ("2,12", 0.0, 25.0, 0.0)
+    assert ee.setting_parts("wait1+pin0.06+limit25") == ("wait1", 0.06, 25.0, 0.0)
     for good in ("2,12+limit25", "0+limit2", "wait1+pin0.06+limit90"):
         assert ee._smoothing_ok(good), good
     for bad in ("2,12+limit0", "2,12+limit0.5", "2,12+limit91", "2,12+limitx", "+limit25",
@@ -271,3 +270,15 @@ def test_foot_pinning_runs_through_mocapctl_and_slows_planted_feet(tmp_path):
     free, pinned = slide["--smoothing 2,12 (the engine's default)"], slide["--smoothing 2,12 --foot-pin 0.06"]
     assert 0.0 < pinned < free, (pinned, free)
     assert "planted feet slide" in text and "The motion capture's own planted feet slide" in text
+
+
+def test_chest_settings_are_read_checked_and_passed_to_mocapctl():
+    assert ee.setting_parts("2,12+chest0.5") == ("2,12", 0.0, 0.0, 0.5)
+    assert ee.setting_parts("wait1+pin0.06+limit25+chest1") == ("wait1", 0.06, 25.0, 1.0)
+    for good in ("2,12+chest0.5", "0+limit25+chest0.25", "wait1+pin0.06+limit25+chest1"):
+        assert ee._smoothing_ok(good), good
+    for bad in ("2,12+chest0", "2,12+chest1.5", "2,12+chestx", "+chest0.5", "2,12+chest0.5+limit25"):
+        assert not ee._smoothing_ok(bad), bad
+    assert ee.engine_options("2,12+limit25+chest0.5") == [
+        "--smoothing", "2,12", "--pose-limits", "25", "--chest-follow", "0.5"]
+    assert ee._label("2,12+chest0.5") == "--smoothing 2,12 --chest-follow 0.5"

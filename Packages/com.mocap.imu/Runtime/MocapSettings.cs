@@ -204,6 +204,8 @@ namespace Mocap.Imu
         [Range(0f, SolverConfig.MaxFootPinSlideSpeed)] public float footPinSlideSpeed = 0.06f;
         [Tooltip("Pose limits: a joint the model bends where no person's joint goes is turned back to within this many degrees of the range people's joints take. 25 keeps out poses nobody takes and leaves every other pose as it is; 0 = off.")]
         [Range(0f, SolverConfig.MaxPoseLimitDegrees)] public float poseLimitDegrees = 25f;
+        [Tooltip("Chest following (a model with a chest sensor): the spine turns this share of the way from the model's chest to what the chest sensor reports. 0.5 suits the seven-sensor model; 0 = off. No effect without a chest sensor.")]
+        [Range(0f, 1f)] public float chestFollowShare = 0.5f;
 
         [Header("Characters (one sensor set each)")]
         [Tooltip("One entry per performer: each has its own sensor set and drives its own avatar.")]
@@ -278,6 +280,7 @@ namespace Mocap.Imu
                 SmoothingDelayFrames = smoothingDelayFrames,
                 FootPinSlideSpeed = footPinSlideSpeed,
                 PoseLimitDegrees = SolverConfig.PoseLimitFrom(poseLimitDegrees),
+                ChestFollowShare = SolverConfig.ChestFollowFrom(chestFollowShare),
             };
         }
 

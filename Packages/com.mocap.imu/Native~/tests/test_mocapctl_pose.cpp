@@ -374,6 +374,49 @@ TEST(MocapctlSensors, SensorsTheModelDoesNotRequireBecomeOptional)
     EXPECT_NE(sensors_only.output.find("chest", reason), std::string::npos) << sensors_only.output;
 }
 
+// --chest-follow reaches the solver: on a seven-sensor capture the chest model's spine turns
+// towards the chest while the pelvis and the legs keep the model's rotations; shares outside 0..1
+// are refused before anything runs.
+TEST(MocapctlSensors, ChestFollowOptionTurnsTheSpineAndRejectsBadValues)
+{
+    REQUIRE_ORT();
+    const std::string py = python_with_numpy();
+    if (py.empty()) GTEST_SKIP() << "no Python with numpy";
+    const std::string model =
+        (kTestsDir / ".." / ".." / "Runtime" / "Models" / "mocap_pose_chest_int8.onnx").string();
+    const std::string dir = test_temp_dir();
+    const std::string capture = dir + "/seven_follow.cap";
+    const std::string set = " --sensors pelvis=0,left_wrist=1,right_wrist=2,left_shin=3,right_shin=4,head=5,chest=6";
+    Result r = mocapctl("synth --out " + capture + " --motion mixed --seconds 3" + set);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string free = dir + "/chest_free.jsonl", followed = dir + "/chest_followed.jsonl";
+    r = mocapctl("replay " + capture + " --model " + model + set + " --smoothing 0 --json " + free);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = mocapctl("replay " + capture + " --model " + model + set + " --smoothing 0 --chest-follow 0.5 --json " +
+                 followed);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    Result check = run("\"" + py + "\" -c \"import json,sys\n"
+                       "free=[json.loads(l) for l in open(sys.argv[1])]\n"
+                       "fol=[json.loads(l) for l in open(sys.argv[2])]\n"
+                       "assert len(free)==len(fol)>100\n"
+                       "turned=0\n"
+                       "for a,b in zip(free,fol):\n"
+                       "    for j in (0,1,2,4,5,7,8):\n"
+                       "        assert a['joint_rotations'][j]==b['joint_rotations'][j],j\n"
+                       "    turned+=a['joint_rotations'][9]!=b['joint_rotations'][9]\n"
+                       "print(turned,len(free))\" " + free + " " + followed);
+    ASSERT_EQ(check.exit_code, 0) << check.output;
+    int turned = 0, poses = 0;
+    ASSERT_EQ(std::sscanf(check.output.c_str(), "%d %d", &turned, &poses), 2) << check.output;
+    EXPECT_GT(turned, poses * 9 / 10) << "the chest bone moves towards its sensor";
+    for (const char *bad : {"abc", "-0.1", "1.5", "nan"}) {
+        r = mocapctl("replay " + capture + " --model " + model + set + " --json " + dir +
+                     "/bad_follow.jsonl --chest-follow " + bad);
+        EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find("--chest-follow wants the share"), std::string::npos) << r.output;
+    }
+}
+
 namespace {
 
 

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -28,6 +29,7 @@ extern "C" {
 #include "mocap_math.h"
 #include "onnx_runtime.h"
 #include "pose_limits.h"
+#include "chest_follow.h"
 #include "platform.h"
 #include "skeleton_fk.h"
 #include "smpl_skeleton.h"
@@ -769,6 +771,13 @@ TEST_F(SolverOnShippedModel, SmoothingDelayAndFootPinningAreCheckedAndSetBeforeT
     EXPECT_EQ(mocap_solver_set_pose_limits(nullptr, 25.0f), MOCAP_ERR_INVALID_ARGUMENT);
     EXPECT_EQ(mocap_solver_set_pose_limits(solver.s, MOCAP_POSE_LIMITS_MAX_DEG), MOCAP_OK);
     EXPECT_EQ(mocap_solver_set_pose_limits(solver.s, 0.0f), MOCAP_OK);
+    for (float bad : {-0.1f, 1.01f, std::nanf("")}) {
+        EXPECT_EQ(mocap_solver_set_chest_follow(solver.s, bad), MOCAP_ERR_INVALID_ARGUMENT) << bad;
+        EXPECT_NE(std::string(mocap_last_error()).find("chest following"), std::string::npos);
+    }
+    EXPECT_EQ(mocap_solver_set_chest_follow(nullptr, 0.5f), MOCAP_ERR_INVALID_ARGUMENT);
+    EXPECT_EQ(mocap_solver_set_chest_follow(solver.s, 1.0f), MOCAP_OK);
+    EXPECT_EQ(mocap_solver_set_chest_follow(solver.s, 0.0f), MOCAP_OK);
     std::string cap = test_temp_path("smooth_delay_state.cap");
     synth_config cfg = short_capture(23, 1.0, "mixed", cap);
     sessions.list.push_back(open_replay(cap, cfg));
@@ -778,6 +787,7 @@ TEST_F(SolverOnShippedModel, SmoothingDelayAndFootPinningAreCheckedAndSetBeforeT
     EXPECT_EQ(mocap_solver_set_smoothing_delay(solver.s, 1), MOCAP_ERR_STATE);
     EXPECT_EQ(mocap_solver_set_foot_pinning(solver.s, 0.06f), MOCAP_ERR_STATE);
     EXPECT_EQ(mocap_solver_set_pose_limits(solver.s, 25.0f), MOCAP_ERR_STATE);
+    EXPECT_EQ(mocap_solver_set_chest_follow(solver.s, 0.5f), MOCAP_ERR_STATE);
 }
 
 // Pose limits guard the network's pose and nothing else: with every sensor live the network reads
@@ -1380,9 +1390,9 @@ TEST(Solver, StructLayoutTableHasTheSolverStructs)
         EXPECT_EQ(r->size, e.size) << e.s << "." << e.f;
     }
     EXPECT_EQ(mocap_api_version(), 6);        // 6: sensor sets (counts, segments, states)
-    EXPECT_EQ(mocap_api_version_minor(), 5);  // 6.1: performer height; 6.2: smoothing that waits;
+    EXPECT_EQ(mocap_api_version_minor(), 6);  // 6.1: performer height; 6.2: smoothing that waits;
                                               // 6.3: foot pinning; 6.4: model contract 3;
-                                              // 6.5: pose limits
+                                              // 6.5: pose limits; 6.6: chest following
     // The sensor-set fields a binding mirrors are in the table too.
     const mocap_field_layout *count = find("mocap_frame", "sensor_count");
     ASSERT_NE(count, nullptr);
@@ -1492,15 +1502,21 @@ void chest_tap(void *user, int32_t, const mocap_frame *frame, const float *, con
 }
 
 // Runs one session through a fresh solver of `model` to the end; smoothing off, so the poses are
-// the model's own outputs.
-std::vector<mocap_pose> solve_to_end(mocap_model *model, mocap_session *session, ChestTap *tap)
+// the model's own outputs (turned towards a chest sensor by chest_follow). tap (may be null) sees
+// every model input.
+std::vector<mocap_pose> solve_to_end(mocap_model *model, mocap_session *session, solver_input_tap tap,
+                                     void *tap_user, float chest_follow = 0.0f)
 {
     const mocap_solver_config sc = raw_output_config();
     Solver solver;
-    EXPECT_EQ(mocap_solver_open(model, &sc, &solver.s), MOCAP_OK) << mocap_last_error();
     int32_t ch = -1;
-    EXPECT_EQ(mocap_solver_add_character(solver.s, session, &ch), MOCAP_OK) << mocap_last_error();
-    if (tap) solver_set_input_tap(solver.s, chest_tap, tap);
+    if (mocap_solver_open(model, &sc, &solver.s) != MOCAP_OK ||
+        mocap_solver_set_chest_follow(solver.s, chest_follow) != MOCAP_OK ||
+        mocap_solver_add_character(solver.s, session, &ch) != MOCAP_OK) {
+        ADD_FAILURE() << mocap_last_error();
+        return {};
+    }
+    if (tap) solver_set_input_tap(solver.s, tap, tap_user);
     EXPECT_EQ(mocap_solver_start(solver.s), MOCAP_OK);
     EXPECT_EQ(mocap_session_start(session), MOCAP_OK);
     std::vector<std::vector<mocap_pose>> poses;
@@ -1532,7 +1548,7 @@ TEST(SolverSensorSets, ContractTwoModelReceivesTheChestAndItsMask)
     sessions.list.push_back(open_replay_sensors(cap, cfg, 6, true));
     ASSERT_NE(sessions.list[0], nullptr);
     ChestTap tap;
-    std::vector<mocap_pose> poses = solve_to_end(model.m, sessions.list[0], &tap);
+    std::vector<mocap_pose> poses = solve_to_end(model.m, sessions.list[0], chest_tap, &tap);
     ASSERT_GT(poses.size(), (size_t)(cfg.motion_s * 60.0));
     EXPECT_EQ(tap.sensors, 7);
     size_t checked = 0;
@@ -1569,7 +1585,7 @@ TEST(SolverSensorSets, ContractTwoModelRunsWithoutItsOptionalSensor)
     sessions.list.push_back(open_replay_sensors(cap, cfg, 6, false));
     ASSERT_NE(sessions.list[0], nullptr);
     ChestTap tap;
-    std::vector<mocap_pose> poses = solve_to_end(model.m, sessions.list[0], &tap);
+    std::vector<mocap_pose> poses = solve_to_end(model.m, sessions.list[0], chest_tap, &tap);
     ASSERT_GT(poses.size(), (size_t)(cfg.motion_s * 60.0));
     for (const mocap_pose &p : poses) {
         ASSERT_FLOAT_EQ(p.root_velocity[0], 6.0f) << p.frame_sequence;
@@ -1683,8 +1699,8 @@ TEST_F(SolverOnShippedModel, ExtraSensorLeavesAContractOneModelUntouched)
     seven.list.push_back(open_replay_sensors(cap, cfg, 6, true));
     ASSERT_NE(six.list[0], nullptr);
     ASSERT_NE(seven.list[0], nullptr);
-    std::vector<mocap_pose> a = solve_to_end(model.m, six.list[0], nullptr);
-    std::vector<mocap_pose> b = solve_to_end(model.m, seven.list[0], nullptr);
+    std::vector<mocap_pose> a = solve_to_end(model.m, six.list[0], nullptr, nullptr);
+    std::vector<mocap_pose> b = solve_to_end(model.m, seven.list[0], nullptr, nullptr);
     ASSERT_GT(a.size(), (size_t)(cfg.motion_s * 60.0));
     ASSERT_EQ(a.size(), b.size());
     for (size_t i = 0; i < a.size(); ++i) {
@@ -2026,3 +2042,84 @@ TEST_F(SolverOnShippedModel, ASilentPelvisTurnsWithTheShins)
     EXPECT_GT(off_held / (held + silent) * deg, 30.0);
 }
 
+
+namespace {
+
+// The raw poses of a replay of the six and, with_chest, the chest on node 6, with the given chest
+// following, every model input reported to tap.
+std::vector<mocap_pose> solve_chest_replay(mocap_model *model, const std::string &cap,
+                                           const synth_config &cfg, bool with_chest,
+                                           float chest_follow, SilenceTap &tap)
+{
+    Sessions sessions;
+    sessions.list.push_back(open_replay_sensors(cap, cfg, 6, with_chest));
+    if (!sessions.list[0]) return {};
+    return solve_to_end(model, sessions.list[0], silence_tap, &tap, chest_follow);
+}
+
+}  // namespace
+
+// Each pose is the model's own turned by chest_follow_apply towards the chest it was fed: the
+// chest bone ends half as far from its sensor, and the root, contacts and velocity are the model's.
+TEST(SolverOnShippedChestModel, ChestFollowingTurnsTheSpineTowardsTheChestSensor)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedChestModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = test_temp_path("chest_follow.cap");
+    synth_config cfg = short_capture(31, 4.0, "mixed", cap, true);
+    SilenceTap free_tap, follow_tap;
+    std::vector<mocap_pose> free_pose = solve_chest_replay(model.m, cap, cfg, true, 0.0f, free_tap);
+    std::vector<mocap_pose> followed = solve_chest_replay(model.m, cap, cfg, true, 0.5f, follow_tap);
+    ASSERT_GT(free_pose.size(), 200u);
+    ASSERT_EQ(free_pose.size(), followed.size());
+    const int chest = 6;
+    double off_before = 0.0, off_after = 0.0;
+    for (size_t t = 0; t < followed.size(); ++t) {
+        const auto fed = follow_tap.fed.find(followed[t].frame_sequence);
+        ASSERT_NE(fed, follow_tap.fed.end());
+        ASSERT_TRUE(fed->second.state[chest] == MOCAP_SENSOR_FRESH ||
+                    fed->second.state[chest] == MOCAP_SENSOR_HOLDING) << t;
+        double m[9], sensed[4], q[MOCAP_JOINT_COUNT][4];
+        for (int i = 0; i < 9; ++i) m[i] = fed->second.orientation[chest][i];
+        mat3_to_quat(sensed, m);
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j)
+            for (int i = 0; i < 4; ++i) q[j][i] = free_pose[t].joint_rotations[j][i];
+        double g_free[9], g_followed[9];
+        pose_global(free_pose[t], CHEST_FOLLOW_SPINE3, g_free);
+        pose_global(followed[t], CHEST_FOLLOW_SPINE3, g_followed);
+        off_before += mat3_angle_deg(g_free, m);
+        off_after += mat3_angle_deg(g_followed, m);
+        ASSERT_EQ(chest_follow_apply(q, sensed, 0.5), 0);
+        for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) {
+            double got[4];
+            for (int i = 0; i < 4; ++i) got[i] = followed[t].joint_rotations[j][i];
+            EXPECT_LT(quat_angle_deg(q[j], got), 0.005) << "pose " << t << " joint " << j;
+        }
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(followed[t].root_velocity[i], free_pose[t].root_velocity[i]);
+        EXPECT_EQ(followed[t].foot_contact[0], free_pose[t].foot_contact[0]);
+    }
+    off_before /= followed.size();
+    off_after /= followed.size();
+    EXPECT_GT(off_before, 1.0) << "the model leaves its chest away from the sensor";
+    EXPECT_NEAR(off_after, 0.5 * off_before, 0.01 * off_before);
+}
+
+// Without a chest in the session the setting changes nothing: the model is told the chest is
+// missing, and there is nothing to follow.
+TEST(SolverOnShippedChestModel, ChestFollowingWithoutAChestLeavesThePose)
+{
+    REQUIRE_ORT();
+    Model model;
+    ASSERT_EQ(open_model(kShippedChestModel, &model.m), MOCAP_OK) << mocap_last_error();
+    std::string cap = test_temp_path("chest_follow_six.cap");
+    synth_config cfg = short_capture(32, 2.0, "mixed", cap, true);
+    SilenceTap free_tap, follow_tap;
+    std::vector<mocap_pose> free_pose = solve_chest_replay(model.m, cap, cfg, false, 0.0f, free_tap);
+    std::vector<mocap_pose> followed = solve_chest_replay(model.m, cap, cfg, false, 1.0f, follow_tap);
+    ASSERT_GT(free_pose.size(), 100u);
+    ASSERT_EQ(free_pose.size(), followed.size());
+    for (size_t t = 0; t < followed.size(); ++t)
+        ASSERT_EQ(std::memcmp(followed[t].joint_rotations, free_pose[t].joint_rotations,
+                              sizeof followed[t].joint_rotations), 0) << t;
+}

@@ -11,6 +11,7 @@
 #include "drift.h"
 #include "foot_pin.h"
 #include "pose_limits.h"
+#include "chest_follow.h"
 #include "error.h"
 #include "mocap_math.h"
 #include "platform.h"
@@ -110,6 +111,7 @@ struct mocap_solver {
     drift_params drift;
     foot_pin_params pin;
     double pose_limit_deg;      /* the pose guard's tolerance (0: off) */
+    double chest_follow;        /* share of the way the spine turns to a chest sensor (0: off) */
     pose_filter_params smoothing;
     int smoothing_delay;        /* frames the centred window waits for (0: the one-euro filter) */
     double smoothing_weights[WAITING_FRAMES]; /* its binomial weights */
@@ -132,6 +134,7 @@ struct mocap_solver {
     int sensors;                /* N: the model's sensor count */
     int with_mask;              /* the model takes the mask (contract 2, or 3 with masked features) */
     int pelvis_index;           /* the model's pelvis sensor (-1: none) */
+    int chest_index;            /* the model's sensor on the chest bone, spine3 (-1: none) */
     float in_ori[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS * 9];
     float in_acc[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS * 3];
     float in_mask[MOCAP_MAX_CHARACTERS][MOCAP_MAX_SENSORS];
@@ -699,13 +702,29 @@ static void ease_returning_sensors(const mocap_solver *s, character *ch, const m
     }
 }
 
+/* The spine towards the chest sensor (chest_follow.h), when the chest has a sample of its own:
+ * a silent chest's stand-in is the model's own guess, and a masked one was not read. */
+static void follow_chest(const mocap_solver *s, const character *ch, const mocap_frame *f,
+                         const float *orientation, const float *mask, double (*q)[4])
+{
+    const int k = s->chest_index;
+    if (s->chest_follow <= 0.0 || k < 0 || (mask && mask[k] == 0.0f)) return;
+    if (!sensor_live(model_sensor(ch, f, k))) return;
+    double m[9], chest[4];
+    for (int i = 0; i < 9; ++i) m[i] = orientation[k * 9 + i];
+    mat3_to_quat(chest, m);
+    chest_follow_apply(q, chest, s->chest_follow);
+}
+
 static void build_pose(mocap_solver *s, int32_t c, const mocap_frame *f, int64_t taken_ns,
-                       const float *rot, const float *vel, const float *contact)
+                       const float *rot, const float *vel, const float *contact,
+                       const float *orientation, const float *mask)
 {
     character *ch = s->chars[c];
     waiting_frame e;
     waiting_frame_of(&e, s, ch, f, taken_ns);
     for (int j = 0; j < MOCAP_JOINT_COUNT; ++j) skeleton_matrix_to_quat(rot + j * 9, e.q[j]);
+    follow_chest(s, ch, f, orientation, mask, e.q);
     /* Before the stand-ins read the pose back, so a silent bone is never fed a broken guess. */
     if (s->pose_limit_deg > 0.0) pose_limits_apply(&ch->limits, s->pose_limit_deg, e.q, NULL);
     keep_sensor_bones(s, ch, (const double (*)[4])e.q);
@@ -850,7 +869,8 @@ mocap_status solver_solve(mocap_solver *s, const int32_t *chars, const mocap_fra
             memcpy(ch->state_c + (size_t)l * H, sc + ((size_t)l * nb + b) * H, (size_t)H * sizeof(float));
         }
         build_pose(s, chars[i], frames[i], s->tick_taken[i], rot + (size_t)b * MOCAP_JOINT_COUNT * 9,
-                   vel + (size_t)b * 3, con + (size_t)b * 2);
+                   vel + (size_t)b * 3, con + (size_t)b * 2, s->in_ori[b],
+                   s->with_mask ? s->in_mask[b] : NULL);
     }
     const int64_t t1 = mocap_monotonic_ns();
     mocap_atomic_add_u64(&s->ticks, 1);
@@ -1018,8 +1038,11 @@ mocap_status mocap_solver_open(mocap_model *model, const mocap_solver_config *co
     s->sensors = (int)info->sensor_count;
     s->with_mask = model_has_mask(model);
     s->pelvis_index = -1;
-    for (int k = 0; k < s->sensors; ++k)
+    s->chest_index = -1;
+    for (int k = 0; k < s->sensors; ++k) {
         if (info->sensor_segments[k] == MOCAP_SEGMENT_PELVIS) s->pelvis_index = k;
+        if (mocap_segment_joint(info->sensor_segments[k]) == CHEST_FOLLOW_SPINE3) s->chest_index = k;
+    }
     s->period_ns = (int64_t)(1e9 / info->frame_rate);
     s->drift.dt = 1.0 / info->frame_rate;
     s->smoothing.dt = 1.0 / info->frame_rate;
@@ -1281,6 +1304,18 @@ mocap_status mocap_solver_set_pose_limits(mocap_solver *s, float tolerance_deg)
                           "%g..%g (0: off)", (double)tolerance_deg, (double)MOCAP_POSE_LIMITS_MIN_DEG,
                           (double)MOCAP_POSE_LIMITS_MAX_DEG);
     s->pose_limit_deg = tolerance_deg;
+    return MOCAP_OK;
+}
+
+mocap_status mocap_solver_set_chest_follow(mocap_solver *s, float share)
+{
+    if (!s) return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "solver is NULL");
+    if (s->started || s->prepared)
+        return mocap_fail(MOCAP_ERR_STATE, "chest following is set before mocap_solver_start");
+    if (!(share >= 0.0f && share <= 1.0f))
+        return mocap_fail(MOCAP_ERR_INVALID_ARGUMENT, "chest following share %g is outside 0..1 "
+                          "(0: off)", (double)share);
+    s->chest_follow = share;
     return MOCAP_OK;
 }
 

@@ -227,6 +227,15 @@ int cli_pose_limits(int argc, char **argv, float *out)
     return 2;
 }
 
+int cli_chest_follow(int argc, char **argv, float *out)
+{
+    const char *text;
+    if (option_in_range(argc, argv, "--chest-follow", 0.0, 1.0, out, &text) == 0) return 0;
+    fprintf(stderr, "mocapctl: --chest-follow wants the share of the way the spine turns to the "
+                    "chest sensor, 0 (off) to 1, got '%s'\n", text);
+    return 2;
+}
+
 int height_supported(const mocap_model *model, float height_m)
 {
     float training_height, exponent;

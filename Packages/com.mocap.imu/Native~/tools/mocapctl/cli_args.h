@@ -57,6 +57,12 @@ int cli_foot_pin(int argc, char **argv, float *out);
 /* --pose-limits DEG (for mocap_solver_set_pose_limits): *out = DEG, 0 when absent; 2 (and a
  * message) when DEG is neither 0 nor a number in MOCAP_POSE_LIMITS_MIN_DEG..MAX_DEG, else 0. */
 int cli_pose_limits(int argc, char **argv, float *out);
+/* --chest-follow SHARE (for mocap_solver_set_chest_follow): *out = SHARE, 0 when absent; 2 (and
+ * a message) when SHARE is not a number in 0..1, else 0. */
+int cli_chest_follow(int argc, char **argv, float *out);
+#define CHEST_FOLLOW_HELP                                                                        \
+    "  --chest-follow SHARE turn the spine SHARE (0..1) of the way from the model's chest to the\n" \
+    "                       chest sensor's (0.5 suits the seven-sensor model; default 0: off)\n"
 #define POSE_LIMITS_HELP                                                                         \
     "  --pose-limits DEG    turn a joint the model bends where no person's joint goes back to\n" \
     "                       within DEG degrees of the range people's joints take (25 keeps\n"    \

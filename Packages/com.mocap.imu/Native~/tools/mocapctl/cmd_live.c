@@ -17,7 +17,7 @@
  * (fps, root position, foot contacts, flags) ten times a second. 0, or 1 when inference failed. */
 static int show_poses_until(mocap_session *session, mocap_model *model,
                             const mocap_solver_config *config, int32_t smoothing_delay, float foot_pin,
-                            float pose_limits, float height_m, double limit_s)
+                            float pose_limits, float chest_follow, float height_m, double limit_s)
 {
     mocap_solver *solver = NULL;
     int32_t id = -1;
@@ -25,6 +25,7 @@ static int show_poses_until(mocap_session *session, mocap_model *model,
     if (s == MOCAP_OK) s = mocap_solver_set_smoothing_delay(solver, smoothing_delay);
     if (s == MOCAP_OK) s = mocap_solver_set_foot_pinning(solver, foot_pin);
     if (s == MOCAP_OK) s = mocap_solver_set_pose_limits(solver, pose_limits);
+    if (s == MOCAP_OK) s = mocap_solver_set_chest_follow(solver, chest_follow);
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &id);
     if (s == MOCAP_OK && apply_height(solver, id, height_m) != 0) {
         mocap_solver_close(solver);
@@ -94,6 +95,8 @@ int cmd_live(int argc, char **argv)
     if (cli_foot_pin(argc, argv, &foot_pin) != 0) return 2;
     float pose_limits = 0.0f;
     if (cli_pose_limits(argc, argv, &pose_limits) != 0) return 2;
+    float chest_follow = 0.0f;
+    if (cli_chest_follow(argc, argv, &chest_follow) != 0) return 2;
     const char *record = cli_value(argc, argv, "--record");
     static const char *const live_outputs[] = {"--record", NULL};
     cli_refuse_overwriting(cli_value(argc, argv, "--port"), "serial port", argc, argv, live_outputs);
@@ -136,7 +139,7 @@ int cmd_live(int argc, char **argv)
         rc = 1; /* nothing arrives: showing an empty status would only wait */
     } else if (rc == 0 && model) {
         rc = show_poses_until(session, model, &solver_config, cli_smoothing_delay(argc, argv), foot_pin,
-                              pose_limits, height, limit);
+                              pose_limits, chest_follow, height, limit);
     } else {
         live_session_show_status(session, limit);
     }

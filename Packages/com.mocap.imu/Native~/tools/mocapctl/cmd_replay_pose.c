@@ -89,6 +89,8 @@ int cmd_replay_pose(int argc, char **argv)
     if (cli_foot_pin(argc, argv, &foot_pin) != 0) return 2;
     float pose_limits = 0.0f;
     if (cli_pose_limits(argc, argv, &pose_limits) != 0) return 2;
+    float chest_follow = 0.0f;
+    if (cli_chest_follow(argc, argv, &chest_follow) != 0) return 2;
     const char *model_arg = cli_value(argc, argv, "--model");
     const char *out_path = cli_value(argc, argv, "--out");
     const char *json_path = cli_value(argc, argv, "--json");
@@ -181,6 +183,7 @@ int cmd_replay_pose(int argc, char **argv)
     if (s == MOCAP_OK) s = mocap_solver_set_smoothing_delay(solver, cli_smoothing_delay(argc, argv));
     if (s == MOCAP_OK) s = mocap_solver_set_foot_pinning(solver, foot_pin);
     if (s == MOCAP_OK) s = mocap_solver_set_pose_limits(solver, pose_limits);
+    if (s == MOCAP_OK) s = mocap_solver_set_chest_follow(solver, chest_follow);
     if (s == MOCAP_OK) s = mocap_solver_add_character(solver, session, &character);
     if (s == MOCAP_OK && apply_height(solver, character, height) != 0) goto done;
     if (s == MOCAP_OK) s = mocap_solver_start(solver);

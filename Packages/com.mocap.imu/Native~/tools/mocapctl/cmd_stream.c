@@ -38,6 +38,8 @@ int cmd_stream(int argc, char **argv)
     if (cli_foot_pin(argc, argv, &foot_pin) != 0) return 2;
     float pose_limits = 0.0f;
     if (cli_pose_limits(argc, argv, &pose_limits) != 0) return 2;
+    float chest_follow = 0.0f;
+    if (cli_chest_follow(argc, argv, &chest_follow) != 0) return 2;
     mocap_session_config sensor_check;
     mocap_config_defaults(&sensor_check);
     if (sensor_set_from_args(argc, argv, &sensor_check) != 0) return 2; /* before any socket */
@@ -127,6 +129,7 @@ int cmd_stream(int argc, char **argv)
     if (s == MOCAP_OK) s = mocap_solver_set_smoothing_delay(solver, cli_smoothing_delay(argc, argv));
     if (s == MOCAP_OK) s = mocap_solver_set_foot_pinning(solver, foot_pin);
     if (s == MOCAP_OK) s = mocap_solver_set_pose_limits(solver, pose_limits);
+    if (s == MOCAP_OK) s = mocap_solver_set_chest_follow(solver, chest_follow);
     for (int i = 0; s == MOCAP_OK && i < characters; ++i)
         s = mocap_solver_add_character(solver, sessions[i], &ids[i]);
     for (int i = 0; s == MOCAP_OK && i < characters; ++i)

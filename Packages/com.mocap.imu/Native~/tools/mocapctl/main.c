@@ -55,7 +55,8 @@ static const mocapctl_command COMMANDS[] = {
      "       mocapctl replay CAPTURE [--model M.onnx] [--out POSE.bvh] [--bvh-order zxy|xyz]\n"
      "                      [--json POSES.jsonl] [--pose-csv POSES.csv] [--truth CAPTURE.truth.csv]\n"
      "                      [--metrics-json ACCURACY.json] [--smoothing HZ[,BETA]|waitN] [--height M]\n"
-     "                      [--foot-pin SPEED] [--pose-limits DEG] [--sensors LIST]\n"
+     "                      [--foot-pin SPEED] [--pose-limits DEG] [--chest-follow SHARE]\n"
+     "                      [--sensors LIST]\n"
      "The first form: decode -> filter -> calibrate, a summary per sensor and, with synth's truth,\n"
      "the bone orientation error. The second runs the pose model too (decode -> filter ->\n"
      "calibrate -> model -> drift correction): chosen by --model, --out, --json, --pose-csv or a\n"
@@ -79,13 +80,14 @@ static const mocapctl_command COMMANDS[] = {
      HEIGHT_HELP
      FOOT_PIN_HELP
      POSE_LIMITS_HELP
+     CHEST_FOLLOW_HELP
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
      cmd_replay},
     {"live", MOCAPCTL_LIVE_OPTIONS, "guided calibration on real sensors, then live status or poses",
      "usage: mocapctl live --port DEV [--baud B] [--record CAPTURE] [--seconds S] [--model M | --pose]\n"
      "                    [--smoothing HZ[,BETA]|waitN] [--height M] [--foot-pin SPEED]\n"
-     "                    [--pose-limits DEG] [--sensors LIST]\n"
+     "                    [--pose-limits DEG] [--chest-follow SHARE] [--sensors LIST]\n"
      "The heading and T-pose steps with a countdown, then a status line until Ctrl-C.\n"
      "  --port DEV           the receiver's serial port\n"
      "  --baud B             its baud rate\n"
@@ -97,6 +99,7 @@ static const mocapctl_command COMMANDS[] = {
      HEIGHT_HELP
      FOOT_PIN_HELP
      POSE_LIMITS_HELP
+     CHEST_FOLLOW_HELP
      SENSOR_SET_HELP
      "                       with the model, the sensors it does not require are optional\n",
      cmd_live},
@@ -112,7 +115,8 @@ static const mocapctl_command COMMANDS[] = {
      "usage: mocapctl stream --vmc HOST:PORT [--vmc ...] (--replay CAPTURE [--replay ...]\n"
      "                      [--speed X | --fast] [--prelude H,S,T] | --port DEV [--baud B]) [--model M]\n"
      "                      [--rate HZ] [--seconds S] [--allow-remote] [--smoothing HZ[,BETA]|waitN]\n"
-     "                      [--height M] [--foot-pin SPEED] [--pose-limits DEG] [--sensors LIST]\n"
+     "                      [--height M] [--foot-pin SPEED] [--pose-limits DEG]\n"
+     "                      [--chest-follow SHARE] [--sensors LIST]\n"
      "Character i (the i-th --replay, or the one --port) goes to the i-th --vmc.\n"
      "  --vmc HOST:PORT      a receiver (VSeeFace, EVMC4U, VMC4B listen on 39539)\n"
      "  --replay CAPTURE     a character from a capture\n"
@@ -130,6 +134,7 @@ static const mocapctl_command COMMANDS[] = {
      HEIGHT_HELP
      FOOT_PIN_HELP
      POSE_LIMITS_HELP
+     CHEST_FOLLOW_HELP
      SENSOR_SET_HELP
      "                       the sensors the model does not require are optional\n",
      cmd_stream},

@@ -11,14 +11,14 @@
 #define MOCAPCTL_REPLAY_OPTIONS                                                                   \
     "--truth= --calibration= --prelude= --save-calibration= --csv= --realtime --rate= "         \
     "--model= --out= --bvh-order= --json= --pose-csv= --metrics-json= --smoothing= --height= "  \
-    "--foot-pin= --pose-limits= --sensors="
+    "--foot-pin= --pose-limits= --chest-follow= --sensors="
 #define MOCAPCTL_LIVE_OPTIONS                                                                     \
     "--port= --baud= --record= --seconds= --model= --pose --smoothing= --height= --foot-pin= "    \
-    "--pose-limits= --sensors="
+    "--pose-limits= --chest-follow= --sensors="
 #define MOCAPCTL_RECORD_OPTIONS "--port= --out= --baud= --seconds= --sensors="
 #define MOCAPCTL_STREAM_OPTIONS                                                                   \
     "--vmc= --replay= --realtime --fast --speed= --prelude= --port= --baud= --model= --rate= "         \
-    "--seconds= --allow-remote --smoothing= --height= --foot-pin= --pose-limits= "\
+    "--seconds= --allow-remote --smoothing= --height= --foot-pin= --pose-limits= --chest-follow= "\
     "--sensors="
 #define MOCAPCTL_BENCH_DECODE_OPTIONS "--seconds="
 #define MOCAPCTL_BENCH_OPTIONS                                                                    \

@@ -30,7 +30,7 @@ namespace Mocap.Imu
         internal const int ApiVersion = 6;
 
         /// <summary>MOCAP_API_VERSION_MINOR these bindings need at least.</summary>
-        internal const int ApiMinorVersion = 5;
+        internal const int ApiMinorVersion = 6;
 
         internal const int PathMax = 260;
 

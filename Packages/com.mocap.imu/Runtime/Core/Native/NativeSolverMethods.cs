@@ -82,6 +82,9 @@ namespace Mocap.Imu
         internal static extern MocapStatus mocap_solver_set_pose_limits(SolverHandle solver, float toleranceDegrees);
 
         [DllImport(Library, CallingConvention = Cdecl)]
+        internal static extern MocapStatus mocap_solver_set_chest_follow(SolverHandle solver, float share);
+
+        [DllImport(Library, CallingConvention = Cdecl)]
         internal static extern MocapStatus mocap_solver_get_stats(SolverHandle solver, int character,
                                                                   MocapSolverStats* stats);
 

@@ -627,6 +627,30 @@ namespace Mocap.Imu.Tests
         }
 
         [Test]
+        public void ChestFollowingReachesTheEngine()
+        {
+            // The share reaches the engine, which checks it; a model without a chest sensor has
+            // nothing to follow, so its poses stay bit for bit the model's.
+            Assert.AreEqual(0f, new SolverConfig().ChestFollowShare);
+            var free = SolverReplay.SolveOneCharacter(_capture, _model, new SolverConfig { SmoothingMinCutoffHz = 0f });
+            var followed = SolverReplay.SolveOneCharacter(_capture, _model,
+                new SolverConfig { SmoothingMinCutoffHz = 0f, ChestFollowShare = 1f });
+            Assert.AreEqual(free.Count, followed.Count);
+            Assert.Greater(free.Count, 100);
+            for (int i = 0; i < free.Count; i++)
+                for (int j = 0; j < MocapPose.JointCount; j++)
+                    Assert.AreEqual(free[i].GetJointRotation(j), followed[i].GetJointRotation(j), $"pose {i} joint {j}");
+            var e = Assert.Throws<MocapException>(() => MocapSolver.Open(_model,
+                new SolverConfig { ChestFollowShare = 1.5f }));
+            Assert.AreEqual(MocapStatus.InvalidArgument, e.Status);
+            StringAssert.Contains("chest following", e.Message);
+            Assert.AreEqual(0f, SolverConfig.ChestFollowFrom(float.NaN));
+            Assert.AreEqual(0f, SolverConfig.ChestFollowFrom(-0.5f));
+            Assert.AreEqual(0.5f, SolverConfig.ChestFollowFrom(0.5f));
+            Assert.AreEqual(1f, SolverConfig.ChestFollowFrom(3f));
+        }
+
+        [Test]
         public void APoseLimitFromASliderIsOneTheEngineTakes()
         {
             Assert.AreEqual(0f, SolverConfig.PoseLimitFrom(0f));
