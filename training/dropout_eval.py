@@ -311,25 +311,30 @@ def session_sensors_argument(sensors) -> str:
     return ",".join(f"{name}={node}" for name, node in zip(sensors, node_ids(sensors)))
 
 
+def rule_options(pose_limits: float = 0.0, chest_follow: float = 0.0) -> tuple:
+    """mocapctl's options for the engine's rules after the network: the pose guard
+    (--pose-limits DEG) and chest following (--chest-follow SHARE); 0 leaves a rule off."""
+    return ((("--pose-limits", f"{pose_limits:g}") if pose_limits else ())
+            + (("--chest-follow", f"{chest_follow:g}") if chest_follow else ()))
+
+
 def replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors=DEFAULT_SENSORS,
-                   pose_limits: float = 0.0) -> list:
+                   rules: tuple = ()) -> list:
     """mocapctl replay of a capture of these sensors through the model, against its truth, with
-    the poses and the accuracy figures written to files; pose_limits: --pose-limits (0: off)."""
+    the poses and the accuracy figures written to files; rules: rule_options' options."""
     cmd = [str(mocapctl), "replay", str(capture), "--model", str(model), "--truth", str(truth_csv),
            "--pose-csv", str(poses), "--metrics-json", str(metrics)]
     if tuple(sensors) != tuple(DEFAULT_SENSORS):
         cmd += ["--sensors", session_sensors_argument(sensors)]
-    if pose_limits:
-        cmd += ["--pose-limits", f"{pose_limits:g}"]
-    return cmd
+    return cmd + list(rules)
 
 
 def replay(mocapctl, capture: Path, truth_csv: Path, model, workdir: Path, stem: str,
-           sensors=DEFAULT_SENSORS, pose_limits: float = 0.0):
+           sensors=DEFAULT_SENSORS, rules: tuple = ()):
     """mocapctl replay with the model, a session of the capture's sensors: (time_s, flags, root,
     quats, metrics json)."""
     poses, metrics = workdir / f"{stem}.poses.csv", workdir / f"{stem}.metrics.json"
-    cmd = replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors, pose_limits)
+    cmd = replay_command(mocapctl, capture, truth_csv, model, poses, metrics, sensors, rules)
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         raise CommandError(f"mocapctl replay {capture.name} failed (status {r.returncode}): "
@@ -470,10 +475,10 @@ def gap_window(motion: sk.Motion, gap_s: float, lead_in: float = LEAD_IN_S) -> W
 
 def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Path, seed: int,
                   world: str = "enu", mocapctl=None, sensors=DEFAULT_SENSORS,
-                  pose_range=None, pose_limits: float = 0.0) -> list:
+                  pose_range=None, rules: tuple = ()) -> list:
     """Every condition ("none" first, then each segment silent) of one clip -> [ConditionScore].
     sensors: the capture's (and the session's) sensor set; pose_range: see score_condition;
-    pose_limits: the engine's pose guard (mocapctl --pose-limits; 0: off)."""
+    rules: the engine's rules after the network (rule_options)."""
     from .ort import mocapctl_path
     from .synth_capture import Silence, load_truth, synth_capture
     mocapctl = mocapctl or mocapctl_path(require_onnx=True)
@@ -490,7 +495,7 @@ def evaluate_clip(motion: sk.Motion, segments, gap_s: float, model, workdir: Pat
                       silences=silences, sensors=sensors)
         truth = load_truth(cap.with_suffix(".truth.npz"))
         time_s, flags, root, quats, metrics = replay(mocapctl, cap, cap.with_suffix(".truth.csv"),
-                                                     model, workdir, stem, sensors, pose_limits)
+                                                     model, workdir, stem, sensors, rules)
         run = align_to_truth(time_s, flags, root, quats, truth, metrics)
         err = frame_errors(run)
         bone = None if condition == NONE else bones[condition]
@@ -807,9 +812,9 @@ def write_report(path: Path, scores, meta: dict) -> Path:
 # ------------------------------------------------------------------------------ command
 def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, model=DEFAULT_MODEL,
                    seed: int = 0, workdir=None, progress=print, sensors=DEFAULT_SENSORS,
-                   pose_range=None, pose_limits: float = 0.0) -> list:
+                   pose_range=None, rules: tuple = ()) -> list:
     """Every clip's conditions -> [ConditionScore] (clip order, "none" first in each clip);
-    pose_range: see score_condition; pose_limits: see evaluate_clip."""
+    pose_range: see score_condition; rules: see evaluate_clip."""
     from .ort import mocapctl_path
     mocapctl = mocapctl_path(require_onnx=True)
     scores = []
@@ -822,7 +827,7 @@ def run_evaluation(motions, segments=DEFAULT_SENSORS, gap_s: float = GAP_S, mode
             clip_scores = evaluate_clip(motion, segments, gap_s, model, d, seed + i,
                                         world="enu" if i % 2 == 0 else "nwu", mocapctl=mocapctl,
                                         sensors=sensors, pose_range=pose_range,
-                                        pose_limits=pose_limits)
+                                        rules=rules)
             scores += clip_scores
             if progress:
                 worst = max((s.recovery for s in clip_scores[1:]), default=math.nan)
@@ -928,6 +933,7 @@ _SECONDS = number_type(float, lambda v: v > 0, "a positive number of seconds")
 POSE_LIMITS_MIN_DEG, POSE_LIMITS_MAX_DEG = 1.0, 90.0
 POSE_LIMITS = number_type(float, lambda v: v == 0 or POSE_LIMITS_MIN_DEG <= v <= POSE_LIMITS_MAX_DEG,
                           f"0 (off) or a tolerance from {POSE_LIMITS_MIN_DEG:g} to {POSE_LIMITS_MAX_DEG:g} deg")
+CHEST_FOLLOW = number_type(float, lambda v: 0.0 <= v <= 1.0, "a share from 0 (off) to 1")
 
 
 def add_arguments(p=None):
@@ -953,6 +959,9 @@ def add_arguments(p=None):
                         "or a file that `python3 -m training pose-range --out` saved")
     p.add_argument("--pose-limits", type=POSE_LIMITS, default=0.0, metavar="DEG",
                    help="the engine's pose guard, mocapctl replay --pose-limits DEG (default 0: off)")
+    p.add_argument("--chest-follow", type=CHEST_FOLLOW, default=0.0, metavar="SHARE",
+                   help="turn the spine SHARE of the way towards a live chest sensor, mocapctl "
+                        "replay --chest-follow SHARE (default 0: off)")
     return p
 
 
@@ -984,8 +993,10 @@ def main(args=None) -> int:
     pose_range, range_note = pose_range_of(args.pose_range)
     notes = [range_note]
     pose_limits = getattr(args, "pose_limits", 0.0)
+    chest_follow = getattr(args, "chest_follow", 0.0)
     scores = run_evaluation(motions, segments, args.seconds, model, args.seed, args.keep,
-                            sensors=sensors, pose_range=pose_range, pose_limits=pose_limits)
+                            sensors=sensors, pose_range=pose_range,
+                            rules=rule_options(pose_limits, chest_follow))
     command = "python3 -m training missing-sensor " + " ".join(shlex.quote(a) for a in _argv_of(args))
     left_out = [s for s in model_sensors if s not in sensors]
     if left_out:
@@ -1004,6 +1015,10 @@ def main(args=None) -> int:
         notes.append(f"The engine's pose guard is on (mocapctl --pose-limits {pose_limits:g}): a joint "
                      f"further than {pose_limits:g} deg from the range people's joints take is turned "
                      "back to that distance.")
+    if chest_follow:
+        notes.append(f"Chest following is on (mocapctl --chest-follow {chest_follow:g}): while the "
+                     f"chest sensor is live, the spine turns {chest_follow:g} of the way from the "
+                     "network's chest bone towards it.")
     notes.append("A silent pelvis is never masked (every model reads the body in its frame): it is "
                  "fed its last sample turned about the vertical by the shins' mean heading change "
                  "since it was last live, at rest (zero acceleration).")
@@ -1038,9 +1053,7 @@ def _argv_of(args) -> list:
         out += ["--out", _shown(args.out)]
     if args.pose_range != "train":
         out += ["--pose-range", args.pose_range if args.pose_range == "none" else _shown(args.pose_range)]
-    if getattr(args, "pose_limits", 0.0):
-        out += ["--pose-limits", f"{args.pose_limits:g}"]
-    return out
+    return out + list(rule_options(getattr(args, "pose_limits", 0.0), getattr(args, "chest_follow", 0.0)))
 
 
 if __name__ == "__main__":

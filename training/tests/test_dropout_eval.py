@@ -234,7 +234,7 @@ def test_bad_options_are_usage_errors(tmp_path):
 def test_pose_limits_reach_the_replay_and_bad_ones_are_refused(capsys):
     plain = de.replay_command("mocapctl", "a.cap", "a.truth.csv", "m.onnx", "p.csv", "m.json")
     held = de.replay_command("mocapctl", "a.cap", "a.truth.csv", "m.onnx", "p.csv", "m.json",
-                             pose_limits=25.0)
+                             rules=de.rule_options(pose_limits=25.0))
     assert "--pose-limits" not in plain and held == plain + ["--pose-limits", "25"]
     for bad in ("0.5", "91", "-1", "x"):
         with pytest.raises(SystemExit):
@@ -242,6 +242,21 @@ def test_pose_limits_reach_the_replay_and_bad_ones_are_refused(capsys):
     assert "0 (off) or a tolerance" in capsys.readouterr().err
     assert de.add_arguments().parse_args(["--pose-limits", "25"]).pose_limits == 25.0
     assert de.add_arguments().parse_args([]).pose_limits == 0.0
+
+
+def test_chest_following_reaches_the_replay_and_bad_shares_are_refused(capsys):
+    plain = de.replay_command("mocapctl", "a.cap", "a.truth.csv", "m.onnx", "p.csv", "m.json")
+    both = de.replay_command("mocapctl", "a.cap", "a.truth.csv", "m.onnx", "p.csv", "m.json",
+                             rules=de.rule_options(pose_limits=25.0, chest_follow=0.5))
+    assert both == plain + ["--pose-limits", "25", "--chest-follow", "0.5"]
+    assert de.rule_options() == ()
+    for bad in ("-0.1", "1.5", "x", "nan"):
+        with pytest.raises(SystemExit):
+            de.add_arguments().parse_args(["--chest-follow", bad])
+    assert "a share from 0 (off) to 1" in capsys.readouterr().err
+    args = de.add_arguments().parse_args(["--split", "val", "--chest-follow", "0.5", "--pose-limits", "25"])
+    assert args.chest_follow == 0.5
+    assert de._argv_of(args)[-4:] == ["--pose-limits", "25", "--chest-follow", "0.5"]
 
 
 @needs_ort

@@ -9,13 +9,12 @@
 extern "C" {
 #include "chest_follow.h"
 #include "mocap_math.h"
+#include "smpl_skeleton.h"
 }
 
 namespace {
 
-const int kJoints = 24;
-const int kParents[kJoints] = {-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8,
-                               9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21};
+const int kJoints = MOCAP_JOINT_COUNT;
 const int kNeck = 12, kLeftCollar = 13, kRightCollar = 14, kHead = 15, kLeftArm = 16, kRightArm = 17;
 
 void random_pose(mocap_rng *rng, double q[kJoints][4])
@@ -33,7 +32,7 @@ void random_pose(mocap_rng *rng, double q[kJoints][4])
 void globals(const double q[kJoints][4], double g[kJoints][4])
 {
     quat_copy(g[0], q[0]);
-    for (int j = 1; j < kJoints; ++j) quat_multiply(g[j], g[kParents[j]], q[j]);
+    for (int j = 1; j < kJoints; ++j) quat_multiply(g[j], g[smpl_joint_parent(j)], q[j]);
 }
 
 double angle_deg(const double a[4], const double b[4]) { return quat_angle_deg(a, b); }
@@ -80,9 +79,9 @@ TEST(ChestFollow, MovesTheChestTheSharedWayAndSpreadsItOverTheSpine)
                 quat_copy(local_before, before[0]);
                 quat_copy(local_after, after[0]);
             } else {
-                quat_conjugate(inv, before[kParents[j]]);
+                quat_conjugate(inv, before[smpl_joint_parent(j)]);
                 quat_multiply(local_before, inv, before[j]);
-                quat_conjugate(inv, after[kParents[j]]);
+                quat_conjugate(inv, after[smpl_joint_parent(j)]);
                 quat_multiply(local_after, inv, after[j]);
             }
             EXPECT_LT(angle_deg(local_before, local_after), 1e-6) << "joint " << j;
