@@ -627,13 +627,14 @@ MOCAP_API mocap_status mocap_solver_set_foot_pinning(mocap_solver *solver, float
  * mocap_solver_start; one thread. */
 MOCAP_API mocap_status mocap_solver_set_pose_limits(mocap_solver *solver, float tolerance_deg);
 /* (API 6.6) Chest following, for a model that reads a chest sensor (MOCAP_SEGMENT_CHEST): with
- * share > 0 (up to 1), whenever the chest sensor has a sample of its own, the spine's three
- * joints are turned so the chest bone moves `share` of the way from where the model put it to
- * where the sensor reports it, spread over the spine (a third at the lowest joint, two thirds at
- * the next, all of it at the chest). The neck and collars move with the chest; the head and the
- * upper arms keep the orientation the model gave them. The model leaves the chest about 7 deg
- * from its sensor; 0.5, chosen on the training people, takes validation people's joint positions
- * from 5.32 to 5.07 cm (`training/results/chest-follow/`). Applied to the model's output, before
+ * share > 0 (up to 1), whenever the chest sensor has a sample of its own, the spine's joints are
+ * turned so the chest bone moves `share` of the way from where the model put it to where the
+ * sensor reports it, spread over the lower back as people bend it (two thirds of the turn at the
+ * lowest joint, all of it at the next; the chest keeps its bend from there). The neck and collars
+ * move with the chest; the head and the upper arms keep the orientation the model gave them. The
+ * model leaves the chest about 7 deg from its sensor; 0.5, chosen on the training people, takes
+ * validation people's joint positions through the engine from 5.23 to 4.64 cm
+ * (`training/results/chest-follow/`). Applied to the model's output, before
  * pose limits and smoothing. No effect for a model without a chest sensor. 0 (the default) turns
  * it off. Before mocap_solver_start; one thread. */
 MOCAP_API mocap_status mocap_solver_set_chest_follow(mocap_solver *solver, float share);

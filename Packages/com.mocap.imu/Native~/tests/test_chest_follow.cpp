@@ -65,9 +65,18 @@ TEST(ChestFollow, MovesTheChestTheSharedWayAndSpreadsItOverTheSpine)
         globals(q, after);
         EXPECT_NEAR(angle_deg(before[CHEST_FOLLOW_SPINE3], after[CHEST_FOLLOW_SPINE3]), share * off, 1e-6);
         EXPECT_NEAR(angle_deg(after[CHEST_FOLLOW_SPINE3], chest), (1.0 - share) * off, 1e-6);
-        // The lower spine joints take a third and two thirds of the turn, in the world frame.
-        EXPECT_NEAR(angle_deg(before[CHEST_FOLLOW_SPINE1], after[CHEST_FOLLOW_SPINE1]), share * off / 3.0, 1e-6);
-        EXPECT_NEAR(angle_deg(before[CHEST_FOLLOW_SPINE2], after[CHEST_FOLLOW_SPINE2]), 2.0 * share * off / 3.0, 1e-6);
+        // The lower spine joints take two thirds and all of the turn, in the world frame, and
+        // spine3 keeps its bend from spine2.
+        EXPECT_NEAR(angle_deg(before[CHEST_FOLLOW_SPINE1], after[CHEST_FOLLOW_SPINE1]), 2.0 * share * off / 3.0, 1e-6);
+        EXPECT_NEAR(angle_deg(before[CHEST_FOLLOW_SPINE2], after[CHEST_FOLLOW_SPINE2]), share * off, 1e-6);
+        {
+            double inv[4], bend_before[4], bend_after[4];
+            quat_conjugate(inv, before[CHEST_FOLLOW_SPINE2]);
+            quat_multiply(bend_before, inv, before[CHEST_FOLLOW_SPINE3]);
+            quat_conjugate(inv, after[CHEST_FOLLOW_SPINE2]);
+            quat_multiply(bend_after, inv, after[CHEST_FOLLOW_SPINE3]);
+            EXPECT_LT(angle_deg(bend_before, bend_after), 1e-6);
+        }
         for (int j : {kNeck, kLeftCollar, kRightCollar})
             EXPECT_NEAR(angle_deg(before[j], after[j]), share * off, 1e-6) << "joint " << j;
         for (int j : {kHead, kLeftArm, kRightArm})

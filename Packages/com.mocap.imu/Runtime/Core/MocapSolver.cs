@@ -68,9 +68,9 @@ namespace Mocap.Imu
         public float PoseLimitDegrees { get; set; }
         /// <summary>Chest following, for a model that reads a chest sensor: with a share &gt; 0 (up
         /// to 1) the spine turns that share of the way from where the model put the chest to
-        /// where the chest sensor reports it, spread over the three spine joints; the head and the
-        /// upper arms keep the model's orientation. 0.5 takes the seven-sensor model's joint
-        /// positions from 5.2 to 4.8 cm on people it never saw. No effect without a chest sensor;
+        /// where the chest sensor reports it, spread over the lower back as people bend it; the
+        /// head and the upper arms keep the model's orientation. 0.5 takes the seven-sensor
+        /// model's joint positions from 5.2 to 4.6 cm on people it never saw. No effect without a chest sensor;
         /// 0 (the default) leaves the pose as the model gave it.</summary>
         public float ChestFollowShare { get; set; }
 

@@ -60,8 +60,8 @@ int chest_follow_apply(double (*q)[4], const double chest[4], double share)
     double inv9[4], turn[4], part[3][4];
     quat_conjugate(inv9, g9);
     quat_multiply(turn, sensed, inv9);
-    turn_power(part[0], turn, share / 3.0);
-    turn_power(part[1], turn, 2.0 * share / 3.0);
+    turn_power(part[0], turn, share * CHEST_FOLLOW_SPINE1_PART);
+    turn_power(part[1], turn, share * CHEST_FOLLOW_SPINE2_PART);
     turn_power(part[2], turn, share);
 
     double n3[4], n6[4], n9[4];

@@ -2,7 +2,10 @@
  * chest bone about 7 deg from what the sensor reports (the other sensors' bones: 3-4 deg), and
  * on the training people the positions were best with the chest turned half of that way: the
  * sensor has its own mounting error, so neither side is the truth. The turn is shared by the
- * three spine joints (a third, two thirds, all of it, as a spine bends); the neck and collars
+ * back as the training motion bends it: spine1 takes two thirds and spine2 the rest, while
+ * spine3 keeps its bend from spine2 (the motion the network learnt from has two back joints, so
+ * its spine3 never bends on its own, and an even split made spine3 turn faster than any of the
+ * training people's did). The same split scored best on the training people. The neck and collars
  * move with the chest, while the head and the upper arms keep the global orientation the network
  * gave them (their own sensors and the wrists' speak for them, not the chest).
  * Pure and allocation-free; unit-tested in tests/test_chest_follow.cpp; the same rule in numpy is
@@ -19,6 +22,10 @@ extern "C" {
 #define CHEST_FOLLOW_SPINE1 3
 #define CHEST_FOLLOW_SPINE2 6
 #define CHEST_FOLLOW_SPINE3 9
+
+/* How much of the chest's turn spine1's and spine2's global orientations take (spine3: all). */
+#define CHEST_FOLLOW_SPINE1_PART (2.0 / 3.0)
+#define CHEST_FOLLOW_SPINE2_PART 1.0
 
 /* q: the pose's rotations (w, x, y, z; joint 0 global, the others local to their parent), turned
  * in place so spine3's global orientation moves `share` (0..1) of the way to `chest` (the chest
