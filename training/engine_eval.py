@@ -499,10 +499,10 @@ def setting_parts(setting: str) -> tuple:
 
 def engine_options(setting: str) -> list:
     """mocapctl's options for an output setting, --smoothing first."""
+    from .dropout_eval import rule_options
     smoothing, pin, limit, chest = setting_parts(setting)
     return (["--smoothing", smoothing] + (["--foot-pin", f"{pin:g}"] if pin else [])
-            + (["--pose-limits", f"{limit:g}"] if limit else [])
-            + (["--chest-follow", f"{chest:g}"] if chest else []))
+            + list(rule_options(limit, chest)))
 HEIGHT = number_type(float, lambda v: 1.0 <= v <= 2.5, "a height from 1 to 2.5 m")
 
 
