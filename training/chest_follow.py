@@ -25,7 +25,7 @@ COLLARS, UPPER_ARMS = (13, 14), (16, 17)
 
 # How the body above the spine answers a turned chest: "spine3 only" turns the chest bone alone,
 # everything else keeping its global orientation; the others spread the turn over the spine
-# (a third, two thirds, all) and keep the global orientation of the joints named (their
+# (ENGINE_SPREAD) and keep the global orientation of the joints named (their
 # descendants follow them), every other joint's local rotation being kept.
 VARIANTS = {
     "spine3 only": None,
@@ -85,9 +85,9 @@ def follow_chest(local_rot, chest, share, keep=(HEAD,) + UPPER_ARMS, spread=ENGI
 
 
 def study(motions, checkpoint, shares, seed=0) -> dict:
-    """(variant, share) -> (angle deg, position cm) frame means, each variant with the even spread;
-    (ENGINE_VARIANT, share, spread name) the same with each of SPREADS; ("model", 0) the
-    network's own; "gap" -> the chest bone's mean angle (deg) from the chest input."""
+    """(variant, share) -> (angle deg, position cm) frame means, each variant with ENGINE_SPREAD;
+    (ENGINE_VARIANT, share, spread name) the engine's variant with each of SPREADS; ("model", 0)
+    the network's own; "gap" -> the chest bone's mean angle (deg) from the chest input."""
     from . import evaluate as ev
     from .sensor_gain import pose_errors
     net = ev.load_torch_model(checkpoint, mirror=True)
@@ -116,10 +116,13 @@ def study(motions, checkpoint, shares, seed=0) -> dict:
         add(("model", 0.0), pred.local_rot, clip, p_true)
         for share in shares:
             for name, keep in VARIANTS.items():
-                add((name, share), follow_chest(pred.local_rot, chest, share, keep), clip, p_true)
+                if name != ENGINE_VARIANT:
+                    add((name, share), follow_chest(pred.local_rot, chest, share, keep), clip, p_true)
             for spread_name, spread in SPREADS.items():
-                add((ENGINE_VARIANT, share, spread_name),
-                    follow_chest(pred.local_rot, chest, share, VARIANTS[ENGINE_VARIANT], spread), clip, p_true)
+                local = follow_chest(pred.local_rot, chest, share, VARIANTS[ENGINE_VARIANT], spread)
+                add((ENGINE_VARIANT, share, spread_name), local, clip, p_true)
+                if spread == ENGINE_SPREAD:   # the engine's variant as the engine runs it
+                    add((ENGINE_VARIANT, share), local, clip, p_true)
     out = {key: (a / n, p / n) for key, (n, a, p) in sums.items()}
     out["gap"] = float(np.concatenate(gaps).mean())
     return out
